@@ -1,0 +1,30 @@
+// 8-bit RGBA images in memory and as PNG files.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+
+namespace vxr {
+
+// Row-major, top row first, 4 bytes per pixel (R, G, B, A).
+struct ImageRgba8 {
+  uint32_t width = 0;
+  uint32_t height = 0;
+  std::vector<uint8_t> pixels;
+
+  ImageRgba8() = default;
+  ImageRgba8(uint32_t w, uint32_t h) : width(w), height(h), pixels(size_t(w) * h * 4, 0) {}
+  uint8_t* at(uint32_t x, uint32_t y) { return &pixels[(size_t(y) * width + x) * 4]; }
+  const uint8_t* at(uint32_t x, uint32_t y) const { return &pixels[(size_t(y) * width + x) * 4]; }
+};
+
+// Writes `path` atomically (temp file then rename): a failed write leaves no
+// file that looks like a finished PNG.
+Status write_png(const std::string& path, const ImageRgba8& image);
+// Reads any 8-bit or 16-bit PNG, converted to RGBA8.
+Result<ImageRgba8> read_png(const std::string& path);
+
+}  // namespace vxr

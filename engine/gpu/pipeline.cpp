@@ -1,0 +1,124 @@
+#include "gpu/pipeline.h"
+
+#include <map>
+
+#include "gpu/shaders.h"
+#include "gpu/vk_check.h"
+
+namespace vxr::gpu {
+
+Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const ComputePipelineCreateInfo& info) {
+  VkDevice dev = ctx.device();
+  ComputePipeline p;
+
+  VkDescriptorSetLayoutCreateInfo dl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  dl.bindingCount = static_cast<uint32_t>(info.bindings.size());
+  dl.pBindings = info.bindings.data();
+  VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateDescriptorSetLayout(dev, &dl, nullptr, &set_layout));
+  p.set_layout = Handle<VkDescriptorSetLayout>(dev, set_layout);
+
+  VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, info.push_constant_bytes};
+  if (info.push_constant_bytes > ctx.limits().maxPushConstantsSize)
+    return out_of_range(std::string(info.shader) + ": push constants of " + std::to_string(info.push_constant_bytes) +
+                        " bytes exceed the device limit " + std::to_string(ctx.limits().maxPushConstantsSize));
+  VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  pl.setLayoutCount = 1;
+  pl.pSetLayouts = &set_layout;
+  pl.pushConstantRangeCount = info.push_constant_bytes ? 1 : 0;
+  pl.pPushConstantRanges = &range;
+  VkPipelineLayout layout = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreatePipelineLayout(dev, &pl, nullptr, &layout));
+  p.layout = Handle<VkPipelineLayout>(dev, layout);
+
+  VXR_ASSIGN_OR_RETURN(Handle<VkShaderModule> module, create_shader_module(ctx, info.shader));
+
+  std::vector<VkSpecializationMapEntry> entries;
+  std::vector<uint32_t> values;
+  for (const auto& sc : info.specialization) {
+    entries.push_back({sc.id, static_cast<uint32_t>(values.size() * 4), 4});
+    values.push_back(sc.value);
+  }
+  VkSpecializationInfo spec{static_cast<uint32_t>(entries.size()), entries.data(), values.size() * 4, values.data()};
+
+  VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+  ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+  ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+  ci.stage.module = module;
+  ci.stage.pName = "main";
+  ci.stage.pSpecializationInfo = entries.empty() ? nullptr : &spec;
+  ci.layout = layout;
+  VkPipeline pipeline = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
+  p.pipeline = Handle<VkPipeline>(dev, pipeline);
+  return p;
+}
+
+Result<Handle<VkDescriptorPool>> create_descriptor_pool(const Context& ctx,
+                                                        const std::vector<VkDescriptorSetLayoutBinding>& bindings,
+                                                        uint32_t max_sets) {
+  std::map<VkDescriptorType, uint32_t> counts;
+  for (const auto& b : bindings) counts[b.descriptorType] += b.descriptorCount * max_sets;
+  std::vector<VkDescriptorPoolSize> sizes;
+  for (auto [type, n] : counts) sizes.push_back({type, n});
+  VkDescriptorPoolCreateInfo ci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  ci.maxSets = max_sets;
+  ci.poolSizeCount = static_cast<uint32_t>(sizes.size());
+  ci.pPoolSizes = sizes.data();
+  VkDescriptorPool pool = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateDescriptorPool(ctx.device(), &ci, nullptr, &pool));
+  return Handle<VkDescriptorPool>(ctx.device(), pool);
+}
+
+Result<VkDescriptorSet> allocate_descriptor_set(const Context& ctx, VkDescriptorPool pool,
+                                                VkDescriptorSetLayout layout) {
+  VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  ai.descriptorPool = pool;
+  ai.descriptorSetCount = 1;
+  ai.pSetLayouts = &layout;
+  VkDescriptorSet set = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkAllocateDescriptorSets(ctx.device(), &ai, &set));
+  return set;
+}
+
+static void write_image(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkDescriptorType type,
+                        VkImageView view, VkSampler sampler, VkImageLayout layout) {
+  VkDescriptorImageInfo ii{sampler, view, layout};
+  VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  w.dstSet = set;
+  w.dstBinding = binding;
+  w.descriptorCount = 1;
+  w.descriptorType = type;
+  w.pImageInfo = &ii;
+  vkUpdateDescriptorSets(ctx.device(), 1, &w, 0, nullptr);
+}
+
+static void write_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkDescriptorType type,
+                         VkBuffer buffer, VkDeviceSize size) {
+  VkDescriptorBufferInfo bi{buffer, 0, size};
+  VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  w.dstSet = set;
+  w.dstBinding = binding;
+  w.descriptorCount = 1;
+  w.descriptorType = type;
+  w.pBufferInfo = &bi;
+  vkUpdateDescriptorSets(ctx.device(), 1, &w, 0, nullptr);
+}
+
+void write_combined_image(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkImageView view,
+                          VkSampler sampler, VkImageLayout layout) {
+  write_image(ctx, set, binding, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, view, sampler, layout);
+}
+void write_storage_image(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkImageView view) {
+  write_image(ctx, set, binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, view, VK_NULL_HANDLE, VK_IMAGE_LAYOUT_GENERAL);
+}
+void write_storage_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBuffer buffer,
+                          VkDeviceSize size) {
+  write_buffer(ctx, set, binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, buffer, size);
+}
+void write_uniform_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBuffer buffer,
+                          VkDeviceSize size) {
+  write_buffer(ctx, set, binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, buffer, size);
+}
+
+}  // namespace vxr::gpu

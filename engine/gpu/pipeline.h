@@ -1,0 +1,52 @@
+// Compute pipelines and their descriptor sets.
+#pragma once
+
+#include <vulkan/vulkan.h>
+
+#include <string_view>
+#include <vector>
+
+#include "core/status.h"
+#include "gpu/context.h"
+#include "gpu/handle.h"
+
+namespace vxr::gpu {
+
+struct SpecializationConstant {
+  uint32_t id;
+  uint32_t value;  // ints, bools and floats (bit-cast) all fit
+};
+
+struct ComputePipelineCreateInfo {
+  std::string_view shader;  // embedded name, e.g. "raycast.comp"
+  std::vector<VkDescriptorSetLayoutBinding> bindings;  // set 0
+  uint32_t push_constant_bytes = 0;
+  std::vector<SpecializationConstant> specialization;
+};
+
+struct ComputePipeline {
+  Handle<VkDescriptorSetLayout> set_layout;
+  Handle<VkPipelineLayout> layout;
+  Handle<VkPipeline> pipeline;
+};
+
+Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const ComputePipelineCreateInfo& info);
+
+// A descriptor pool sized for `max_sets` sets of the given bindings each.
+Result<Handle<VkDescriptorPool>> create_descriptor_pool(const Context& ctx,
+                                                        const std::vector<VkDescriptorSetLayoutBinding>& bindings,
+                                                        uint32_t max_sets);
+// Sets are freed with their pool.
+Result<VkDescriptorSet> allocate_descriptor_set(const Context& ctx, VkDescriptorPool pool,
+                                                VkDescriptorSetLayout layout);
+
+// Small writers for the descriptor kinds vxr uses.
+void write_combined_image(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkImageView view,
+                          VkSampler sampler, VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+void write_storage_image(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkImageView view);
+void write_storage_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBuffer buffer,
+                          VkDeviceSize size = VK_WHOLE_SIZE);
+void write_uniform_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBuffer buffer,
+                          VkDeviceSize size = VK_WHOLE_SIZE);
+
+}  // namespace vxr::gpu

@@ -1,0 +1,227 @@
+#include "gpu/resources.h"
+
+#include <cstring>
+
+#include "core/trace.h"
+#include "gpu/vk_check.h"
+
+namespace vxr::gpu {
+
+Result<Buffer> create_buffer(const Context& ctx, const BufferCreateInfo& info) {
+  if (info.size == 0) return invalid_argument(std::string(info.debug_name) + ": buffer size is 0");
+  VkDevice dev = ctx.device();
+  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  bci.size = info.size;
+  bci.usage = info.usage;
+  bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VkBuffer raw = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateBuffer(dev, &bci, nullptr, &raw));
+  Buffer b;
+  b.buffer = Handle<VkBuffer>(dev, raw);
+  b.size = info.size;
+
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(dev, raw, &req);
+  VkMemoryPropertyFlags required = 0, preferred = 0;
+  switch (info.intent) {
+    case MemoryIntent::kDeviceLocal: required = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT; break;
+    case MemoryIntent::kUpload:
+      required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+      break;
+    case MemoryIntent::kReadback:
+      required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+      preferred = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+      break;
+  }
+  VXR_ASSIGN_OR_RETURN(uint32_t type, ctx.find_memory_type(req.memoryTypeBits, required, preferred));
+  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  mai.allocationSize = req.size;
+  mai.memoryTypeIndex = type;
+  VkDeviceMemory mem = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, &mem));
+  b.memory = Handle<VkDeviceMemory>(dev, mem);
+  VXR_VK_TRY(vkBindBufferMemory(dev, raw, mem, 0));
+  if (info.intent != MemoryIntent::kDeviceLocal) VXR_VK_TRY(vkMapMemory(dev, mem, 0, VK_WHOLE_SIZE, 0, &b.mapped));
+  return b;
+}
+
+uint32_t format_texel_bytes(VkFormat format) {
+  switch (format) {
+    case VK_FORMAT_R8_UNORM:
+    case VK_FORMAT_R8_SNORM:
+    case VK_FORMAT_R8_UINT: return 1;
+    case VK_FORMAT_R16_UNORM:
+    case VK_FORMAT_R16_SNORM:
+    case VK_FORMAT_R16_SFLOAT:
+    case VK_FORMAT_R16_UINT: return 2;
+    case VK_FORMAT_R32_SFLOAT:
+    case VK_FORMAT_R32_UINT:
+    case VK_FORMAT_R8G8B8A8_UNORM:
+    case VK_FORMAT_R8G8B8A8_SRGB:
+    case VK_FORMAT_B8G8R8A8_UNORM:
+    case VK_FORMAT_B8G8R8A8_SRGB:
+    case VK_FORMAT_D32_SFLOAT: return 4;
+    case VK_FORMAT_R16G16B16A16_SFLOAT: return 8;
+    case VK_FORMAT_R32G32B32A32_SFLOAT: return 16;
+    default: return 0;
+  }
+}
+
+Result<Image> create_image(const Context& ctx, const ImageCreateInfo& info) {
+  const auto& lim = ctx.limits();
+  const uint32_t max_dim = info.type == VK_IMAGE_TYPE_3D ? lim.maxImageDimension3D : lim.maxImageDimension2D;
+  const VkExtent3D e = info.extent;
+  if (e.width == 0 || e.height == 0 || e.depth == 0)
+    return invalid_argument(std::string(info.debug_name) + ": image extent has a zero side");
+  if (e.width > max_dim || e.height > max_dim || (info.type == VK_IMAGE_TYPE_3D && e.depth > max_dim))
+    return out_of_range(std::string(info.debug_name) + ": image " + std::to_string(e.width) + "x" +
+                        std::to_string(e.height) + "x" + std::to_string(e.depth) + " exceeds the device limit " +
+                        std::to_string(max_dim));
+
+  VkDevice dev = ctx.device();
+  VkImageCreateInfo ici{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  ici.imageType = info.type;
+  ici.format = info.format;
+  ici.extent = info.type == VK_IMAGE_TYPE_3D ? e : VkExtent3D{e.width, e.height, 1};
+  ici.mipLevels = 1;
+  ici.arrayLayers = 1;
+  ici.samples = VK_SAMPLE_COUNT_1_BIT;
+  ici.tiling = VK_IMAGE_TILING_OPTIMAL;
+  ici.usage = info.usage;
+  ici.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  ici.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  VkImage raw = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateImage(dev, &ici, nullptr, &raw));
+  Image img;
+  img.image = Handle<VkImage>(dev, raw);
+  img.format = info.format;
+  img.extent = ici.extent;
+  img.type = info.type;
+
+  VkMemoryRequirements req;
+  vkGetImageMemoryRequirements(dev, raw, &req);
+  if (req.size > lim.maxStorageBufferRange && req.size > (VkDeviceSize(2) << 30))
+    return out_of_range(std::string(info.debug_name) + ": image needs " + std::to_string(req.size) +
+                        " bytes, more than one allocation may hold");
+  VXR_ASSIGN_OR_RETURN(uint32_t type, ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT));
+  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  mai.allocationSize = req.size;
+  mai.memoryTypeIndex = type;
+  VkDeviceMemory mem = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, &mem));
+  img.memory = Handle<VkDeviceMemory>(dev, mem);
+  VXR_VK_TRY(vkBindImageMemory(dev, raw, mem, 0));
+
+  const bool depth = info.format == VK_FORMAT_D32_SFLOAT;
+  VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  vci.image = raw;
+  vci.viewType = info.type == VK_IMAGE_TYPE_3D ? VK_IMAGE_VIEW_TYPE_3D : VK_IMAGE_VIEW_TYPE_2D;
+  vci.format = info.format;
+  vci.subresourceRange = {static_cast<VkImageAspectFlags>(depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT), 0, 1, 0, 1};
+  VkImageView view = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateImageView(dev, &vci, nullptr, &view));
+  img.view = Handle<VkImageView>(dev, view);
+  return img;
+}
+
+void transition_image(VkCommandBuffer cmd, Image& image, VkImageLayout new_layout,
+                      VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
+                      VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access) {
+  const bool depth = image.format == VK_FORMAT_D32_SFLOAT;
+  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
+  b.srcStageMask = src_stage;
+  b.srcAccessMask = src_access;
+  b.dstStageMask = dst_stage;
+  b.dstAccessMask = dst_access;
+  b.oldLayout = image.layout;
+  b.newLayout = new_layout;
+  b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image.image;
+  b.subresourceRange = {static_cast<VkImageAspectFlags>(depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT), 0, 1, 0, 1};
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.imageMemoryBarrierCount = 1;
+  dep.pImageMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &dep);
+  image.layout = new_layout;
+}
+
+Status upload_image(Context& ctx, Image& image, const void* texels, size_t bytes) {
+  VXR_TRACE_SCOPE("gpu.upload_image");
+  const uint64_t expected = uint64_t(image.extent.width) * image.extent.height * image.extent.depth *
+                            format_texel_bytes(image.format);
+  if (expected != bytes)
+    return invalid_argument("upload_image: got " + std::to_string(bytes) + " bytes, image needs " +
+                            std::to_string(expected));
+  VXR_ASSIGN_OR_RETURN(Buffer staging,
+                       create_buffer(ctx, {bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryIntent::kUpload, "staging"}));
+  std::memcpy(staging.mapped, texels, bytes);
+  return ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    transition_image(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                     VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = image.extent;
+    vkCmdCopyBufferToImage(cmd, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+    transition_image(cmd, image, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                     VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                     VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  });
+}
+
+Status readback_image(Context& ctx, Image& image, void* out, size_t bytes, VkImageLayout final_layout) {
+  VXR_TRACE_SCOPE("gpu.readback_image");
+  const bool depth = image.format == VK_FORMAT_D32_SFLOAT;
+  const uint64_t expected = uint64_t(image.extent.width) * image.extent.height * image.extent.depth *
+                            format_texel_bytes(image.format);
+  if (expected != bytes)
+    return invalid_argument("readback_image: buffer has " + std::to_string(bytes) + " bytes, image needs " +
+                            std::to_string(expected));
+  VXR_ASSIGN_OR_RETURN(Buffer staging, create_buffer(ctx, {bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                                           MemoryIntent::kReadback, "readback"}));
+  VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    transition_image(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                     VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    VkBufferImageCopy region{};
+    region.imageSubresource = {static_cast<VkImageAspectFlags>(depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT), 0, 0, 1};
+    region.imageExtent = image.extent;
+    vkCmdCopyImageToBuffer(cmd, image.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging.buffer, 1, &region);
+    transition_image(cmd, image, final_layout, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                     VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+    VkBufferMemoryBarrier2 hb{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2};
+    hb.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
+    hb.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
+    hb.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
+    hb.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
+    hb.srcQueueFamilyIndex = hb.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    hb.buffer = staging.buffer;
+    hb.size = VK_WHOLE_SIZE;
+    VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+    dep.bufferMemoryBarrierCount = 1;
+    dep.pBufferMemoryBarriers = &hb;
+    vkCmdPipelineBarrier2(cmd, &dep);
+  }));
+  std::memcpy(out, staging.mapped, bytes);
+  return Status::ok();
+}
+
+static Result<Handle<VkSampler>> make_sampler(const Context& ctx, VkFilter filter) {
+  VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  sci.magFilter = sci.minFilter = filter;
+  sci.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+  sci.maxLod = 0.0f;
+  VkSampler s = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateSampler(ctx.device(), &sci, nullptr, &s));
+  return Handle<VkSampler>(ctx.device(), s);
+}
+
+Result<Handle<VkSampler>> create_linear_clamp_sampler(const Context& ctx) {
+  return make_sampler(ctx, VK_FILTER_LINEAR);
+}
+Result<Handle<VkSampler>> create_nearest_clamp_sampler(const Context& ctx) {
+  return make_sampler(ctx, VK_FILTER_NEAREST);
+}
+
+}  // namespace vxr::gpu

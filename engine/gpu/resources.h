@@ -1,0 +1,83 @@
+// Buffers and images with their memory, made from plain create-info structs.
+//
+// Memory intent is an enum, not raw flags: kDeviceLocal for GPU-only data,
+// kUpload for host-written staging, kReadback for host-read results.
+#pragma once
+
+#include <vulkan/vulkan.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "core/status.h"
+#include "gpu/context.h"
+#include "gpu/handle.h"
+
+namespace vxr::gpu {
+
+enum class MemoryIntent { kDeviceLocal, kUpload, kReadback };
+
+struct BufferCreateInfo {
+  VkDeviceSize size = 0;
+  VkBufferUsageFlags usage = 0;
+  MemoryIntent intent = MemoryIntent::kDeviceLocal;
+  const char* debug_name = "buffer";
+};
+
+// The buffer owns its memory; host-visible buffers stay mapped for their life.
+struct Buffer {
+  Handle<VkBuffer> buffer;
+  Handle<VkDeviceMemory> memory;
+  VkDeviceSize size = 0;
+  void* mapped = nullptr;  // non-null for kUpload / kReadback
+  bool host_coherent = true;
+};
+
+Result<Buffer> create_buffer(const Context& ctx, const BufferCreateInfo& info);
+
+struct ImageCreateInfo {
+  VkImageType type = VK_IMAGE_TYPE_2D;
+  VkFormat format = VK_FORMAT_R8G8B8A8_UNORM;
+  VkExtent3D extent{1, 1, 1};
+  VkImageUsageFlags usage = 0;
+  const char* debug_name = "image";
+};
+
+// A device-local image with a view over all of it. `layout` tracks the layout
+// the last recorded barrier left it in.
+struct Image {
+  Handle<VkImage> image;
+  Handle<VkDeviceMemory> memory;
+  Handle<VkImageView> view;
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  VkExtent3D extent{0, 0, 0};
+  VkImageType type = VK_IMAGE_TYPE_2D;
+  VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;
+};
+
+// Checks the extent against the device's limits first: lavapipe does not
+// refuse oversize images, it misbehaves later.
+Result<Image> create_image(const Context& ctx, const ImageCreateInfo& info);
+
+// Bytes per texel of the formats vxr uses; 0 for others.
+uint32_t format_texel_bytes(VkFormat format);
+
+// Records a layout transition of the whole image (synchronization2).
+void transition_image(VkCommandBuffer cmd, Image& image, VkImageLayout new_layout,
+                      VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
+                      VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access);
+
+// Copies tightly packed texels into the whole image through a staging buffer,
+// waits, and leaves the image in SHADER_READ_ONLY_OPTIMAL.
+Status upload_image(Context& ctx, Image& image, const void* texels, size_t bytes);
+
+// Copies the whole image (2D) back into `out` (tightly packed), waits, and
+// leaves the image in `final_layout`.
+Status readback_image(Context& ctx, Image& image, void* out, size_t bytes,
+                      VkImageLayout final_layout = VK_IMAGE_LAYOUT_GENERAL);
+
+Result<Handle<VkSampler>> create_linear_clamp_sampler(const Context& ctx);
+Result<Handle<VkSampler>> create_nearest_clamp_sampler(const Context& ctx);
+
+}  // namespace vxr::gpu

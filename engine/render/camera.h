@@ -1,0 +1,42 @@
+// Cameras and the mapping between world space and a volume's voxel space.
+//
+// World space is physical units (the volume's unit) with the volume centred
+// at the origin. All camera math is double on the CPU; the GPU only sees the
+// result in voxel coordinates.
+#pragma once
+
+#include <array>
+#include <glm/glm.hpp>
+
+namespace vxr {
+
+struct Camera {
+  glm::dvec3 eye{0, 0, 1};
+  glm::dvec3 target{0, 0, 0};
+  glm::dvec3 up{0, 1, 0};
+  double fov_y_deg = 40.0;
+};
+
+// Where a volume sits in world space: voxel (i + 0.5) centres, origin at the
+// volume centre, scaled by voxel size.
+struct VolumePlacement {
+  std::array<uint32_t, 3> dims{1, 1, 1};
+  std::array<double, 3> voxel_size{1, 1, 1};
+
+  glm::dvec3 extent() const;  // physical size of the whole box
+  glm::dvec3 world_to_voxel_point(const glm::dvec3& w) const;
+  glm::dvec3 world_to_voxel_vector(const glm::dvec3& w) const;
+};
+
+// A camera looking at the volume centre from (azimuth, elevation) degrees, at
+// `distance` times the box diagonal; +z of the volume is up on screen.
+Camera orbit_camera(const VolumePlacement& v, double azimuth_deg, double elevation_deg, double distance = 1.6,
+                    double fov_y_deg = 40.0);
+
+// The eye and pixel-direction basis in voxel space, as the ray caster wants it.
+struct VoxelSpaceRays {
+  glm::dvec3 eye, forward, right, up;  // right/up scaled by tan(fov/2) (and aspect for right)
+};
+VoxelSpaceRays rays_in_voxel_space(const Camera& c, const VolumePlacement& v, uint32_t width, uint32_t height);
+
+}  // namespace vxr

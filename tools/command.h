@@ -1,0 +1,33 @@
+// How `vxr` subcommands plug into the command line: one file per subcommand,
+// each with an add_*_command() that registers its options and sets `run`.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "core/status.h"
+#include "gpu/context.h"
+
+namespace vxr::cli {
+
+// Exit codes shared by every subcommand.
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;  // the work failed (bad file, GPU error, ...)
+constexpr int kExitUsage = 2;    // the command line or settings were wrong
+
+struct Invocation {
+  std::function<int()> run;  // set by the chosen subcommand's callback
+};
+
+void add_version_command(CLI::App& app, Invocation& inv);
+void add_demo_command(CLI::App& app, Invocation& inv);
+
+// Opens the Vulkan device (VXR_DEVICE, VXR_VALIDATION from the environment).
+Result<std::unique_ptr<gpu::Context>> open_gpu();
+
+// Prints "vxr: <message>" on stderr and returns `code`.
+int fail(const Status& status, int code = kExitFailure);
+
+}  // namespace vxr::cli
