@@ -1,0 +1,27 @@
+// The one entry point from user inputs to a SlabSource: picks the importer by
+// content and extension. Each format lives in its own file in this folder.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+#include "volume/slab_source.h"
+
+namespace vxr {
+
+// What the user said on the command line; overrides what files claim.
+struct ImportHints {
+  std::optional<std::array<double, 3>> voxel_size;
+  std::optional<std::string> unit;
+};
+
+// inputs: one file, several files (a slice series), a folder, or a glob.
+// Errors name the offending file and the problem.
+Result<std::unique_ptr<SlabSource>> open_import_source(const std::vector<std::string>& inputs,
+                                                       const ImportHints& hints = {});
+
+}  // namespace vxr
