@@ -1,0 +1,68 @@
+#include "bench.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+namespace vxr::bench {
+
+void add_common_options(CLI::App* cmd, BenchOptions& o) {
+  cmd->add_flag("--json", o.json, "also print the JSON report on stdout");
+  cmd->add_option("--out", o.out_dir, "folder for reports and plots (default: out/bench)");
+  cmd->add_option("--repeats", o.repeats, "timed runs per point; the median is reported")->check(CLI::Range(1, 1000));
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+double median_ms(int repeats, const std::function<Status()>& fn, Status* error) {
+  if (Status s = fn(); !s.is_ok()) {
+    if (error) *error = s;
+    return 0.0;
+  }
+  std::vector<double> times;
+  for (int i = 0; i < repeats; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (Status s = fn(); !s.is_ok()) {
+      if (error) *error = s;
+      return 0.0;
+    }
+    times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return median(times);
+}
+
+Result<std::string> write_report(const BenchOptions& o, const std::string& name, nlohmann::json doc,
+                                 const gpu::Context* ctx) {
+  nlohmann::json machine = {{"cpu_threads", std::thread::hardware_concurrency()}};
+  if (ctx) {
+    machine["device"] = ctx->info().name;
+    machine["driver"] = ctx->info().driver_info;
+    machine["fingerprint"] = ctx->info().fingerprint();
+  }
+  doc["machine"] = machine;
+  std::error_code ec;
+  std::filesystem::create_directories(o.out_dir, ec);
+  const std::string path = (std::filesystem::path(o.out_dir) / (name + ".json")).string();
+  const std::string tmp = path + ".partial";
+  {
+    std::ofstream f(tmp, std::ios::trunc);
+    if (!f) return io_error(path + ": cannot open for writing (is the --out folder writable?)");
+    f << doc.dump(2) << "\n";
+    if (!f.flush()) return io_error(path + ": write failed");
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) return io_error(path + ": " + ec.message());
+  if (o.json) std::printf("%s\n", doc.dump(2).c_str());
+  std::printf("%s\n", path.c_str());
+  return path;
+}
+
+}  // namespace vxr::bench

@@ -1,0 +1,98 @@
+// `vxr bench roofline`: the device's ceilings and the ray caster's share of them.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "bench.h"
+#include "render/raycaster.h"
+#include "roofline.h"
+
+namespace vxr::bench {
+namespace {
+
+// Samples the MIP caster takes for this view (MIP never terminates early), from
+// the same ray setup and slab test as the shader, in double.
+uint64_t count_mip_samples(const Camera& cam, const VolumePlacement& v, uint32_t w, uint32_t h, double step) {
+  const VoxelSpaceRays rays = rays_in_voxel_space(cam, v, w, h);
+  const glm::dvec3 box(v.dims[0], v.dims[1], v.dims[2]);
+  uint64_t total = 0;
+  for (uint32_t y = 0; y < h; ++y) {
+    for (uint32_t x = 0; x < w; ++x) {
+      const double nx = (x + 0.5) / w * 2.0 - 1.0, ny = (y + 0.5) / h * 2.0 - 1.0;
+      const glm::dvec3 d = glm::normalize(rays.forward + nx * rays.right - ny * rays.up);
+      double t0 = 0.0, t1 = 1e300;
+      for (int a = 0; a < 3; ++a) {
+        const double ta = (0.0 - rays.eye[a]) / d[a], tb = (box[a] - rays.eye[a]) / d[a];
+        t0 = std::max(t0, std::min(ta, tb));
+        t1 = std::min(t1, std::max(ta, tb));
+      }
+      if (t1 > t0) total += static_cast<uint64_t>(std::ceil((t1 - t0) / step));
+    }
+  }
+  return total;
+}
+
+}  // namespace
+
+void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
+  auto* cmd = bench.add_subcommand("roofline",
+                                   "measure the device's memory and sampling ceilings and the ray caster's share");
+  auto opt = std::make_shared<BenchOptions>();
+  add_common_options(cmd, *opt);
+  cmd->callback([&inv, opt] {
+    inv.run = [opt] {
+      auto gpu = cli::open_gpu();
+      if (!gpu) return cli::fail(gpu.status());
+      gpu::Context& ctx = **gpu;
+      std::fprintf(stderr, "roofline: calibrating %s ...\n", ctx.info().name.c_str());
+      auto roof = measure_roofline(ctx, opt->repeats);
+      if (!roof) return cli::fail(roof.status());
+
+      // The ray caster on a 256^3 u8 volume, MIP, 512x512, 1-voxel steps.
+      DenseVolume vol;
+      vol.dims = {256, 256, 256};
+      vol.data.resize(vol.voxel_count());
+      for (uint32_t z = 0, i = 0; z < 256; ++z)
+        for (uint32_t y = 0; y < 256; ++y)
+          for (uint32_t x = 0; x < 256; ++x, ++i)
+            vol.data[i] = static_cast<uint8_t>(127.5 + 127.5 * std::sin(x * 0.11) * std::cos(y * 0.07 + z * 0.05));
+      auto caster = Raycaster::create(ctx);
+      if (!caster) return cli::fail(caster.status());
+      if (Status s = (*caster)->set_volume(vol); !s) return cli::fail(s);
+      const VolumePlacement placement{vol.dims, vol.voxel_size};
+      const Camera cam = orbit_camera(placement, 30.0, 20.0, 1.3);
+      RaycastSettings rs;
+      rs.model = OpticalModel::kMip;
+      rs.step_voxels = 1.0;
+      Status err;
+      const double ms = median_ms(opt->repeats, [&] { return (*caster)->render(cam, rs, 512, 512).status(); }, &err);
+      if (!err.is_ok()) return cli::fail(err);
+      const uint64_t samples = count_mip_samples(cam, placement, 512, 512, rs.step_voxels);
+      const double rate = samples / (ms * 1e-3);
+
+      nlohmann::json doc = {
+          {"ceilings",
+           {{"copy_gb_per_s", roof->copy_gb_per_s},
+            {"trilinear_samples_per_s", roof->trilinear_samples_per_s},
+            {"transfer_gb_per_s", roof->transfer_gb_per_s},
+            {"copy_ms", roof->copy_ms},
+            {"transfer_ms", roof->transfer_ms},
+            {"sample_ms", roof->sample_ms}}},
+          {"raycaster",
+           {{"scene", "256^3 u8, MIP, 512x512, step 1 voxel"},
+            {"ms", ms},
+            {"samples", samples},
+            {"samples_per_s", rate},
+            {"roofline_ratio", rate / roof->trilinear_samples_per_s},
+            {"note", "ms is wall time of render() incl. submit, readback of 1 MiB"}}},
+      };
+      std::fprintf(stderr, "roofline: shader copy %.1f GB/s, vkCmdCopyBuffer %.1f GB/s, trilinear %.0f M samples/s; ray caster %.0f M samples/s (%.2f of ceiling)\n",
+                   roof->copy_gb_per_s, roof->transfer_gb_per_s, roof->trilinear_samples_per_s / 1e6, rate / 1e6,
+                   rate / roof->trilinear_samples_per_s);
+      auto path = write_report(*opt, "roofline", doc, &ctx);
+      return path ? cli::kExitOk : cli::fail(path.status());
+    };
+  });
+}
+
+}  // namespace vxr::bench

@@ -1,0 +1,24 @@
+// Roofline calibration: the device's memory-bound and sampling-bound
+// ceilings, measured with two tiny kernels, so a ray caster's samples/s can
+// be reported as a fraction of what the machine can do and compared across
+// machines.
+#pragma once
+
+#include "core/status.h"
+#include "gpu/context.h"
+
+namespace vxr::bench {
+
+struct Roofline {
+  double copy_gb_per_s = 0.0;          // bytes read + written per second, buffer stream
+  double trilinear_samples_per_s = 0.0;  // 3D-texture trilinear fetches per second, ray-like access
+  double transfer_gb_per_s = 0.0;     // vkCmdCopyBuffer bytes read + written per second
+  double copy_ms = 0.0;
+  double transfer_ms = 0.0;
+  double sample_ms = 0.0;
+};
+
+// Takes about a second on lavapipe; `repeats` timed runs each, median kept.
+Result<Roofline> measure_roofline(gpu::Context& ctx, int repeats);
+
+}  // namespace vxr::bench

@@ -1,0 +1,14 @@
+// `vxr bench <what>`: the parent of every benchmark. Each benchmark lives in
+// tools/bench/bench_<what>.cpp and is registered here with one line.
+#include "bench/bench.h"
+#include "command.h"
+
+namespace vxr::cli {
+
+void add_bench_command(CLI::App& app, Invocation& inv) {
+  auto* bench = app.add_subcommand("bench", "run a benchmark; writes JSON (and plots) under out/bench/");
+  bench->require_subcommand(1);
+  bench::add_roofline_bench(*bench, inv);
+}
+
+}  // namespace vxr::cli
