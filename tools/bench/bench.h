@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "../command.h"
+#include "command.h"
 #include "core/status.h"
 
 namespace vxr::bench {

@@ -1,0 +1,47 @@
+#include <doctest/doctest.h>
+
+#include <cmath>
+
+#include "bench/plot.h"
+
+using namespace vxr;
+
+namespace {
+bool has_colour_near(const ImageRgba8& img, int cx, int cy, int r, std::array<uint8_t, 3> c) {
+  for (int y = cy - r; y <= cy + r; ++y)
+    for (int x = cx - r; x <= cx + r; ++x) {
+      if (x < 0 || y < 0 || x >= int(img.width) || y >= int(img.height)) continue;
+      const uint8_t* p = img.at(x, y);
+      if (p[0] == c[0] && p[1] == c[1] && p[2] == c[2]) return true;
+    }
+  return false;
+}
+}  // namespace
+
+TEST_CASE("bench plot: points land where their coordinates say, on linear and log axes") {
+  bench::PlotSpec spec;
+  spec.title = "time vs error";
+  spec.x_label = "ms";
+  spec.y_label = "rmse";
+  spec.log_y = true;
+  spec.width = 400;
+  spec.height = 300;
+  bench::PlotSeries a;
+  a.label = "all";
+  a.x = {1, 2, 3};
+  a.y = {1, 10, 100};
+  a.color = {200, 0, 0};
+  spec.series.push_back(a);
+  const ImageRgba8 img = bench::render_plot(spec);
+  REQUIRE(img.width == 400);
+  // Axes: x from 80 to 380 with 5% padding; y from 240 (bottom) to 40 (top), log.
+  // x=2 is the middle of the x range, y=10 the middle of the log range.
+  const int mid_x = 80 + (380 - 80) / 2, mid_y = 240 - (240 - 40) / 2;
+  CHECK(has_colour_near(img, mid_x, mid_y, 2, {200, 0, 0}));
+  // Nothing red far from the three points (e.g. lower-right corner of the plot area).
+  CHECK_FALSE(has_colour_near(img, 370, 230, 3, {200, 0, 0}));
+  // Non-finite and non-positive (log) values are skipped, not drawn at NaN.
+  spec.series[0].y = {std::nan(""), -1, 100};
+  const ImageRgba8 img2 = bench::render_plot(spec);
+  CHECK(img2.width == 400);
+}

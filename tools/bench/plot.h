@@ -1,0 +1,34 @@
+// Small scatter/line plots as PNG for benchmark reports (time vs error,
+// scaling curves). No dependencies beyond core/image: a 5x7 bitmap font,
+// linear or log10 axes, labelled ticks, a legend.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/image.h"
+
+namespace vxr::bench {
+
+struct PlotSeries {
+  std::string label;
+  std::vector<double> x, y;
+  std::array<uint8_t, 3> color{31, 119, 180};
+  bool line = false;     // connect points in the order given
+  bool markers = true;
+  int marker_radius = 3;
+};
+
+struct PlotSpec {
+  std::string title;
+  std::string x_label, y_label;
+  bool log_x = false, log_y = false;
+  uint32_t width = 800, height = 560;
+  std::vector<PlotSeries> series;
+};
+
+// Points with non-finite coordinates (or <= 0 on a log axis) are skipped.
+ImageRgba8 render_plot(const PlotSpec& spec);
+
+}  // namespace vxr::bench
