@@ -9,6 +9,7 @@ void add_bench_command(CLI::App& app, Invocation& inv) {
   auto* bench = app.add_subcommand("bench", "run a benchmark; writes JSON (and plots) under out/bench/");
   bench->require_subcommand(1);
   bench::add_roofline_bench(*bench, inv);
+  bench::add_xr_bench(*bench, inv);
 }
 
 }  // namespace vxr::cli

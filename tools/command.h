@@ -24,6 +24,7 @@ struct Invocation {
 void add_version_command(CLI::App& app, Invocation& inv);
 void add_demo_command(CLI::App& app, Invocation& inv);
 void add_bench_command(CLI::App& app, Invocation& inv);
+void add_view_command(CLI::App& app, Invocation& inv);
 
 // Opens the Vulkan device (VXR_DEVICE, VXR_VALIDATION from the environment).
 Result<std::unique_ptr<gpu::Context>> open_gpu();

@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
   add_version_command(app, inv);
   add_demo_command(app, inv);
   add_bench_command(app, inv);
+  add_view_command(app, inv);
 
   // CLI11 reports a stray word as "a subcommand is required"; name it instead.
   if (argc > 1 && argv[1][0] != '-' && !has_subcommand(app, argv[1])) {

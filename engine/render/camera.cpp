@@ -34,6 +34,15 @@ VoxelSpaceRays rays_in_voxel_space(const Camera& c, const VolumePlacement& v, ui
   if (glm::length(r) < 1e-12) r = glm::cross(f, glm::dvec3(1, 0, 0));  // looking straight along up
   r = glm::normalize(r);
   const glm::dvec3 u = glm::cross(r, f);
+  if (c.frustum) {
+    // ndc -1..1 maps linearly onto left..right (down..up): shift the centre
+    // direction, scale the half-extent. Top image row is `up`.
+    const FrustumTangents& t = *c.frustum;
+    const glm::dvec3 centre = f + r * (0.5 * (t.right + t.left)) + u * (0.5 * (t.up + t.down));
+    return {v.world_to_voxel_point(c.eye), v.world_to_voxel_vector(centre),
+            v.world_to_voxel_vector(r * (0.5 * (t.right - t.left))),
+            v.world_to_voxel_vector(u * (0.5 * (t.up - t.down)))};
+  }
   const double ty = std::tan(glm::radians(c.fov_y_deg) * 0.5);
   const double tx = ty * static_cast<double>(width) / static_cast<double>(height);
   // Directions are mapped linearly, so a pixel's ray maps exactly into voxel space.

@@ -7,14 +7,25 @@
 
 #include <array>
 #include <glm/glm.hpp>
+#include <optional>
 
 namespace vxr {
+
+// An off-axis frustum as tangents of its half-angles (OpenXR's XrFovf, after
+// tan()): left and down are usually negative. Head-mounted displays give each
+// eye an asymmetric one.
+struct FrustumTangents {
+  double left = -1.0, right = 1.0, down = -1.0, up = 1.0;
+};
 
 struct Camera {
   glm::dvec3 eye{0, 0, 1};
   glm::dvec3 target{0, 0, 0};
   glm::dvec3 up{0, 1, 0};
   double fov_y_deg = 40.0;
+  // When set, the image spans exactly this frustum (fov_y_deg and the image
+  // aspect are ignored); the eye still looks along target - eye.
+  std::optional<FrustumTangents> frustum;
 };
 
 // Where a volume sits in world space: voxel (i + 0.5) centres, origin at the

@@ -1,0 +1,109 @@
+// `vxr view [INPUT]`: explore a volume in a headset (OpenXR), a desktop
+// window, or headless, and say which.
+//
+// Auto choice: OpenXR when a runtime answers and has a headset, else the
+// desktop window when a display is there, else headless. --xr / --desktop /
+// --headless force one; --frames N renders N frames and exits cleanly.
+#include <cstdio>
+#include <filesystem>
+
+#include "assets/assets.h"
+#include "command.h"
+#include "xr/headless/headless_target.h"
+#include "xr/target_factory.h"
+#include "xr/view_session.h"
+
+namespace vxr::cli {
+namespace {
+
+struct Options {
+  std::string input;
+  bool sample = false;
+  bool force_xr = false, force_desktop = false, force_headless = false;
+  uint64_t frames = 0;
+  std::string script;
+  std::string png_dir;
+  bool png_every_frame = false;
+  bool lens_warp = false;
+  bool mirror = false;
+  bool stereo = false;
+  uint32_t width = 0, height = 0;
+};
+
+Result<DenseVolume> load_input(const Options& o) {
+  if (o.sample || o.input.empty()) return assets::sample_volume();
+  const std::string ext = std::filesystem::path(o.input).extension().string();
+  if (ext == ".json") return load_raw_volume(o.input);
+  if (ext == ".vxc")
+    return unsupported(o.input + ": .vxc containers are not readable by `vxr view` yet; pass a raw volume's "
+                                 "JSON sidecar or --sample");
+  return invalid_argument(o.input + ": `vxr view` reads a raw volume's JSON sidecar (.json) or --sample");
+}
+
+int run(const Options& o) {
+  auto volume = load_input(o);
+  if (!volume) return fail(volume.status(), volume.status().code() == ErrorCode::kInvalidArgument ? kExitUsage
+                                                                                                   : kExitFailure);
+  xr::TargetRequest req;
+  req.kind = o.force_xr        ? xr::TargetKind::kOpenXr
+             : o.force_desktop ? xr::TargetKind::kDesktop
+             : o.force_headless ? xr::TargetKind::kHeadless
+                                : xr::TargetKind::kAuto;
+  if (!o.script.empty()) {
+    std::string err;
+    if (!xr::load_script(o.script, req.headless.script, err)) return fail(invalid_argument(err), kExitUsage);
+  }
+  if (o.width) req.headless.script.width = o.width;
+  if (o.height) req.headless.script.height = o.height;
+  req.headless.png_dir = o.png_dir;
+  req.headless.png_every_frame = o.png_every_frame;
+  if (o.frames) req.headless.end_frame = o.frames;
+  req.desktop_stereo = o.stereo;
+  req.desktop_mirror = o.mirror;
+
+  auto choice = xr::choose_target(req);
+  if (!choice) return fail(choice.status(), kExitFailure);
+  std::printf("vxr view: %s\n", choice->reason.c_str());
+  std::fflush(stdout);
+
+  xr::ViewOptions vo;
+  vo.frames = o.frames;
+  vo.settings = xr::default_view_settings();
+  vo.warp.enabled = o.lens_warp;
+  const VolumePlacement placement{volume->dims, volume->voxel_size};
+  auto stats = xr::run_view(choice->factory, *volume, vo, xr::default_volume_transform(placement));
+  if (!stats) return fail(stats.status());
+  std::printf("vxr view: %llu frames rendered on %s, %.2f ms mean, %.2f ms max per frame, %d restart(s)\n",
+              static_cast<unsigned long long>(stats->frames_rendered), stats->target.c_str(), stats->mean_frame_ms,
+              stats->max_frame_ms, stats->restarts);
+  const auto& t = stats->transform;
+  std::printf("vxr view: volume at (%.6f, %.6f, %.6f), scale %.9g m/unit\n", t.position.x, t.position.y,
+              t.position.z, t.scale);
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_view_command(CLI::App& app, Invocation& inv) {
+  auto* cmd = app.add_subcommand("view", "explore a volume in a headset (OpenXR), a desktop window, or headless");
+  auto o = std::make_shared<Options>();
+  cmd->add_option("input", o->input, "raw volume JSON sidecar (default: the bundled sample)");
+  cmd->add_flag("--sample", o->sample, "view the bundled sample volume (an MRI head)");
+  auto* fx = cmd->add_flag("--xr", o->force_xr, "use OpenXR (fail if no runtime or headset)");
+  auto* fd = cmd->add_flag("--desktop", o->force_desktop, "use a desktop window");
+  auto* fh = cmd->add_flag("--headless", o->force_headless, "render without a display");
+  fx->excludes(fd, fh);
+  fd->excludes(fh);
+  cmd->add_option("--frames", o->frames, "render N frames, then exit cleanly (0: until closed)");
+  cmd->add_option("--script", o->script, "headless: pose script (JSON; see xr/script.h)");
+  cmd->add_option("--png-dir", o->png_dir, "headless: write the eye images of the last frame here");
+  cmd->add_flag("--png-every-frame", o->png_every_frame, "headless: write every frame's eye images");
+  cmd->add_option("--width", o->width, "headless/desktop eye width in pixels")->check(CLI::Range(1, 4096));
+  cmd->add_option("--height", o->height, "headless/desktop eye height in pixels")->check(CLI::Range(1, 4096));
+  cmd->add_flag("--lens-warp", o->lens_warp, "cast rays on the lens-warped grid (denser at each eye's centre)");
+  cmd->add_flag("--stereo", o->stereo, "desktop: side-by-side stereo");
+  cmd->add_flag("--mirror", o->mirror, "OpenXR: also show the eye images in a desktop window");
+  cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
+}
+
+}  // namespace vxr::cli

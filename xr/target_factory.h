@@ -1,0 +1,32 @@
+// Picks the FrameTarget for `vxr view`: the one factory file that knows every
+// implementation (hello_xr's platform/graphics plugin factory, one axis).
+#pragma once
+
+#include <string>
+
+#include "xr/headless/headless_target.h"
+#include "xr/view_session.h"
+
+namespace vxr::xr {
+
+enum class TargetKind { kAuto, kOpenXr, kDesktop, kHeadless };
+
+struct TargetRequest {
+  TargetKind kind = TargetKind::kAuto;
+  HeadlessOptions headless;     // also gives desktop its eye size and fov
+  bool desktop_stereo = false;  // side-by-side
+  bool desktop_mirror = false;  // OpenXR: mirror the eyes to a window
+};
+
+struct TargetChoice {
+  TargetKind kind = TargetKind::kHeadless;
+  std::string reason;     // "using OpenXR (...)", "using headless (no display: ...)"
+  TargetFactory factory;  // called at each (re)start of the session loop
+};
+
+// Probes in order OpenXR, desktop, headless (or only the forced one) and says
+// why it chose what it chose. A forced target that is unavailable is an error
+// naming what is missing.
+Result<TargetChoice> choose_target(const TargetRequest& request);
+
+}  // namespace vxr::xr
