@@ -2,7 +2,13 @@
 
 #include <filesystem>
 
+#include "volume/importers/imaris_importer.h"
+#include "volume/importers/ome_tiff_importer.h"
+#include "volume/importers/picture_decoder.h"
 #include "volume/importers/raw_importer.h"
+#include "volume/importers/slice_series_importer.h"
+#include "volume/importers/tiff_importer.h"
+#include "volume/importers/tiff_reader.h"
 
 namespace vxr {
 namespace {
@@ -11,6 +17,31 @@ std::string extension_lower(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext;
+}
+
+bool ends_with_lower(const std::string& path, std::string_view suffix) {
+  std::string l = path;
+  for (char& c : l) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return l.size() >= suffix.size() && l.compare(l.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// One file: pick the importer by content first, then by name.
+Result<std::unique_ptr<SlabSource>> open_one_file(const std::string& path) {
+  const std::string ext = extension_lower(path);
+  if (ext == ".json") return open_raw_import(path);
+  if (tiff::has_tiff_magic(path)) return open_tiff_import(path);
+  if (has_hdf5_magic(path)) return open_imaris_import(path);
+  if (ends_with_lower(path, ".companion.ome") || ends_with_lower(path, ".ome.xml")) return open_ome_tiff_import(path);
+  if (Result<PictureHeader> pic = probe_picture(path)) return open_slice_series_import({path});
+  else if (pic.status().code() != ErrorCode::kUnsupported) return pic.status();
+  if (ext == ".tif" || ext == ".tiff" || ext == ".btf" || ext == ".tf8")
+    return invalid_argument(path + ": not a TIFF file (it does not start with a TIFF header II*/MM*)");
+  if (ext == ".ims" || ext == ".h5")
+    return invalid_argument(path + ": not an HDF5/Imaris file (no HDF5 signature)");
+  if (ext == ".png" || ext == ".jpg" || ext == ".jpeg")
+    return invalid_argument(path + ": not a " + ext.substr(1) + " file (wrong signature)");
+  return unsupported(path + ": unrecognised input format (import reads TIFF, OME-TIFF, ImageJ TIFF, Imaris .ims, "
+                     "PNG/JPEG slices, or raw+JSON)");
 }
 
 
@@ -41,8 +72,14 @@ Result<std::unique_ptr<SlabSource>> open_import_source(const std::vector<std::st
   if (inputs.empty()) return invalid_argument("no input files given");
   const std::string& first = inputs.front();
   Result<std::unique_ptr<SlabSource>> source = unsupported(first + ": unrecognised input format");
-  if (inputs.size() == 1 && extension_lower(first) == ".json") {
-    source = open_raw_import(first);
+  std::error_code ec;
+  if (inputs.size() > 1 || std::filesystem::is_directory(first, ec) ||
+      (!std::filesystem::exists(first, ec) && first.find_first_of("*?[") != std::string::npos)) {
+    source = open_slice_series_import(inputs);
+  } else if (!std::filesystem::exists(first, ec)) {
+    return not_found(first + ": no such file or folder");
+  } else {
+    source = open_one_file(first);
   }
   if (!source) return source.status();
   if (!hints.voxel_size && !hints.unit) return source;
