@@ -38,7 +38,7 @@ PageCalibration page_calibration(const tiff::PageInfo& p, const std::string& ima
 Result<std::unique_ptr<SlabSource>> open_tiff_import(const std::string& path) {
   VXR_ASSIGN_OR_RETURN(std::unique_ptr<tiff::TiffFile> file, tiff::TiffFile::open(path));
   VXR_ASSIGN_OR_RETURN(std::vector<tiff::PageInfo> pages, file->scan_pages());
-  const tiff::PageInfo& p0 = pages.front();
+  const tiff::PageInfo p0 = pages.front();  // a copy: pages grows below
   if (looks_like_ome_xml(p0.description)) return open_ome_tiff_import(path);
 
   std::vector<std::string> warnings;
@@ -68,7 +68,7 @@ Result<std::unique_ptr<SlabSource>> open_tiff_import(const std::string& path) {
   if (p0.colormap && !p0.description.empty() && p0.description.rfind("ImageJ=", 0) == 0)
     warnings.push_back(path + ": palette (LUT) image: imported its colours as RGB");
 
-  const uint32_t n = uint32_t(series.size());
+  uint32_t n = uint32_t(series.size());
   uint32_t C = 1, Z = n, T = 1;
   std::string format = n == 1 ? "TIFF image" : "TIFF stack";
   const std::optional<ImageJMetadata> ij = parse_imagej_description(p0.description);
@@ -78,6 +78,24 @@ Result<std::unique_ptr<SlabSource>> open_tiff_import(const std::string& path) {
     if (czt == n) {
       C = ij->channels, Z = ij->slices, T = ij->frames;
       if (C > 1 || T > 1) format = "ImageJ hyperstack TIFF";
+    } else if (n == 1 && ij->images > 1 && uint64_t(ij->channels) * ij->slices * ij->frames == ij->images) {
+      // ImageJ over 4 GB: one IFD, the other planes stored right after the first.
+      const std::optional<uint64_t> base = file->contiguous_data_offset(p0);
+      const uint64_t plane = (uint64_t(p0.width) * p0.spp * p0.bps + 7) / 8 * p0.height;
+      if (!base || *base + plane * ij->images > file->file_size())
+        return corrupt(path + ": ImageJ metadata says " + std::to_string(ij->images) +
+                       " images stored after the first page, but the file is too short or the first page is not "
+                       "stored contiguously; the file is truncated or damaged");
+      for (uint32_t i = 1; i < ij->images; ++i) {
+        tiff::PageInfo v = p0;
+        v.raw_offset = *base + plane * i;
+        v.description.clear();
+        series.push_back(uint32_t(pages.size()));
+        pages.push_back(std::move(v));
+      }
+      n = ij->images;
+      C = ij->channels, Z = ij->slices, T = ij->frames;
+      format = "ImageJ TIFF (over 4 GB, contiguous planes)";
     } else if (ij->images > n) {
       warnings.push_back(path + ": ImageJ metadata says " + std::to_string(ij->images) + " images but the file holds " +
                          std::to_string(n) + " pages; imported the pages as a z stack");

@@ -381,13 +381,26 @@ Status TiffFile::decode_block(const PageInfo& page, uint32_t block, std::vector<
   return Status::ok();
 }
 
-// Uncompressed data: read only the rows needed, straight from the file.
-Status TiffFile::read_block_rows_raw(const PageInfo& page, uint32_t block, uint32_t row0, uint32_t rows,
-                                     uint64_t row_bytes, std::vector<uint8_t>& out) {
+std::optional<uint64_t> TiffFile::contiguous_data_offset(const PageInfo& page) {
+  if (page.compression != COMPRESSION_NONE || page.tiled || page.fill_order != FILLORDER_MSB2LSB ||
+      (page.planar == PLANARCONFIG_SEPARATE && page.spp > 1) || !go_to(page).is_ok())
+    return std::nullopt;
+  const uint32_t n = TIFFNumberOfStrips(tif_);
   int err = 0;
-  const uint64_t off = TIFFGetStrileOffsetWithErr(tif_, block, &err);
-  const uint64_t len = err ? 0 : TIFFGetStrileByteCountWithErr(tif_, block, &err);
-  if (err) return corrupt(path_ + ": cannot read strip/tile offsets");
+  const uint64_t first = TIFFGetStrileOffsetWithErr(tif_, 0, &err);
+  uint64_t end = first;
+  for (uint32_t i = 0; i < n && !err; ++i) {
+    if (TIFFGetStrileOffsetWithErr(tif_, i, &err) != end) return std::nullopt;
+    end += TIFFGetStrileByteCountWithErr(tif_, i, &err);
+  }
+  if (err) return std::nullopt;
+  return first;
+}
+
+// Uncompressed data: read only the rows needed, straight from the file.
+// [off, off + len) is the block (strip, tile or contiguous plane) in the file.
+Status TiffFile::read_rows_raw(const PageInfo& page, uint64_t off, uint64_t len, uint32_t row0, uint32_t rows,
+                               uint64_t row_bytes, std::vector<uint8_t>& out) {
   const uint64_t start = uint64_t(row0) * row_bytes, n = uint64_t(rows) * row_bytes;
   out.assign(n, 0);
   // Bytes beyond the stored byte count are treated as missing (zero), as libtiff does.
@@ -411,7 +424,9 @@ Status TiffFile::read_region(const PageInfo& page, uint32_t channel, uint32_t x0
                              uint32_t h, uint8_t* dst) {
   if (uint64_t(x0) + w > page.width || uint64_t(y0) + h > page.height || channel >= page.channels())
     return internal_error(path_ + ": region outside the page");
-  VXR_RETURN_IF_ERROR(go_to(page));
+  // A plane without an IFD (ImageJ > 4 GB): one block, the whole plane, at raw_offset.
+  const bool virtual_page = page.raw_offset != 0;
+  if (!virtual_page) VXR_RETURN_IF_ERROR(go_to(page));
   const bool palette = page.colormap != nullptr;
   const uint32_t sample = palette ? 0 : channel;
   const bool separate = page.planar == PLANARCONFIG_SEPARATE && page.spp > 1;
@@ -420,9 +435,11 @@ Status TiffFile::read_region(const PageInfo& page, uint32_t channel, uint32_t x0
   const uint32_t across = (page.width + page.block_w - 1) / page.block_w;
   const uint32_t down = (page.height + page.block_h - 1) / page.block_h;
   const uint32_t plane_base = separate ? sample * across * down : 0;
-  const uint64_t row_bytes = page.tiled ? TIFFTileRowSize64(tif_) : TIFFScanlineSize64(tif_);
+  const uint64_t row_bytes = virtual_page ? (uint64_t(page.width) * page.spp * page.bps + 7) / 8
+                             : page.tiled ? TIFFTileRowSize64(tif_)
+                                          : TIFFScanlineSize64(tif_);
   if (row_bytes == 0) return corrupt(path_ + ": cannot size a row (" + take_error() + ")");
-  const bool raw = page.compression == COMPRESSION_NONE && page.fill_order == FILLORDER_MSB2LSB;
+  const bool raw = virtual_page || (page.compression == COMPRESSION_NONE && page.fill_order == FILLORDER_MSB2LSB);
   const uint32_t ob = dtype_bytes(page.dtype);
   // Palette pages: decode indices (u16) then map through the colour map.
   PageInfo index_page = page;
@@ -438,7 +455,14 @@ Status TiffFile::read_region(const PageInfo& page, uint32_t channel, uint32_t x0
       const uint8_t* base = nullptr;
       uint32_t first_row = 0;  // block row that `base` starts at
       if (raw) {
-        VXR_RETURN_IF_ERROR(read_block_rows_raw(page, block, ry0 - by0, ry1 - ry0, row_bytes, scratch_));
+        uint64_t off = page.raw_offset, len = row_bytes * page.height;
+        if (!virtual_page) {
+          int err = 0;
+          off = TIFFGetStrileOffsetWithErr(tif_, block, &err);
+          len = err ? 0 : TIFFGetStrileByteCountWithErr(tif_, block, &err);
+          if (err) return corrupt(path_ + ": cannot read strip/tile offsets");
+        }
+        VXR_RETURN_IF_ERROR(read_rows_raw(page, off, len, ry0 - by0, ry1 - ry0, row_bytes, scratch_));
         base = scratch_.data();
         first_row = ry0 - by0;
       } else {

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,10 @@ struct PageInfo {
   double x_resolution = 0, y_resolution = 0;
   uint16_t resolution_unit = 2;         // RESUNIT_INCH by default, as TIFF says
   DType dtype = DType::kU8;             // what a voxel of this page becomes
+  // Nonzero: a plane with no IFD of its own, stored uncompressed and chunky at
+  // this file offset with page 0's layout (ImageJ files over 4 GB hold one
+  // IFD; the other planes follow the first contiguously).
+  uint64_t raw_offset = 0;
 
   // Channels this page contributes: its samples, or 3 for a colour palette.
   uint32_t channels() const { return colormap ? 3u : spp; }
@@ -73,6 +78,10 @@ class TiffFile {
   Status read_region(const PageInfo& page, uint32_t channel, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
                      uint8_t* dst);
 
+  // Where an uncompressed, chunky, strip-organised page's pixels start, when
+  // its strips lie back to back in the file (nullopt otherwise).
+  std::optional<uint64_t> contiguous_data_offset(const PageInfo& page);
+
   // The first error libtiff reported since the last call (and clears it).
   std::string take_error();
 
@@ -82,8 +91,8 @@ class TiffFile {
   TiffFile() = default;
   Status go_to(const PageInfo& page);
   Status decode_block(const PageInfo& page, uint32_t block, std::vector<uint8_t>& out);
-  Status read_block_rows_raw(const PageInfo& page, uint32_t block, uint32_t row0, uint32_t rows, uint64_t row_bytes,
-                             std::vector<uint8_t>& out);
+  Status read_rows_raw(const PageInfo& page, uint64_t off, uint64_t len, uint32_t row0, uint32_t rows,
+                       uint64_t row_bytes, std::vector<uint8_t>& out);
 
   std::string path_;
   uint64_t file_size_ = 0;
