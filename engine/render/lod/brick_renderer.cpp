@@ -1,0 +1,368 @@
+#include "render/lod/brick_renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "core/trace.h"
+#include "render/colormap.h"
+#include "shared/brick_params.h"
+#include "shared/raycast_params.h"
+
+namespace vxr {
+namespace {
+
+std::vector<VkDescriptorSetLayoutBinding> bindings() {
+  return {
+      {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+  };
+}
+
+glm::vec4 v4(const glm::dvec3& v, double w = 0.0) {
+  return glm::vec4(static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z), static_cast<float>(w));
+}
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void compute_barrier(VkCommandBuffer cmd) {
+  VkMemoryBarrier2 mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+  mb.srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+  mb.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
+  mb.dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+  mb.dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.memoryBarrierCount = 1;
+  dep.pMemoryBarriers = &mb;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+}  // namespace
+
+std::string format_stats(const BrickFrameStats& s) {
+  char buf[320];
+  std::snprintf(buf, sizeof(buf),
+                "visited %llu drawn %llu (fallback %llu) empty %llu culled %llu missing %llu samples %llu "
+                "uploaded %u bricks %.2f MiB hit %.1f%% traverse %.2f ms render %.2f ms",
+                (unsigned long long)s.lod.visited, (unsigned long long)s.lod.drawn,
+                (unsigned long long)s.lod.fallback, (unsigned long long)s.lod.skipped_empty,
+                (unsigned long long)s.lod.culled, (unsigned long long)s.lod.missing, (unsigned long long)s.samples,
+                s.bricks_uploaded, double(s.bytes_uploaded) / (1 << 20), 100.0 * s.hit_rate, s.traverse_ms,
+                s.render_ms);
+  return buf;
+}
+
+Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, const ChunkSource& source,
+                                                             const BrickRendererOptions& options) {
+  std::unique_ptr<BrickRenderer> r(new BrickRenderer(ctx, source));
+  r->opt_ = options;
+  if (source.apron() < 1) return invalid_argument("brick renderer: chunks need an apron of at least 1 voxel");
+  r->value_scale_ = source.info().dtype == DType::kU16 ? 65535.0 : 255.0;
+  VXR_ASSIGN_OR_RETURN(r->pool_, BrickPool::create(ctx, source, options.pool));
+  const auto b = bindings();
+  VXR_ASSIGN_OR_RETURN(r->pipeline_,
+                       gpu::create_compute_pipeline(ctx, {"brick_raycast.comp", b, sizeof(shader::BrickCastParams), {}}));
+  VXR_ASSIGN_OR_RETURN(r->desc_pool_, gpu::create_descriptor_pool(ctx, b, 2));
+  VXR_ASSIGN_OR_RETURN(r->paged_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_.set_layout));
+  VXR_ASSIGN_OR_RETURN(r->mono_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_.set_layout));
+  VXR_ASSIGN_OR_RETURN(r->linear_, gpu::create_linear_clamp_sampler(ctx));
+  VXR_ASSIGN_OR_RETURN(r->transfer_tex_,
+                       gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT, {256, 1, 1},
+                                               VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                               "transfer function"}));
+  VXR_ASSIGN_OR_RETURN(r->table_, gpu::create_buffer(ctx, {uint64_t(options.max_bricks) * sizeof(shader::BrickRecord),
+                                                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                           gpu::MemoryIntent::kUpload, "brick table"}));
+  VXR_ASSIGN_OR_RETURN(r->counters_, gpu::create_buffer(ctx, {16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                              gpu::MemoryIntent::kReadback, "brick counters"}));
+  gpu::write_combined_image(ctx, r->paged_set_, 0, r->pool_->atlas().view, r->linear_);
+  for (VkDescriptorSet set : {r->paged_set_, r->mono_set_}) {
+    gpu::write_storage_buffer(ctx, set, 4, r->table_.buffer);
+    gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
+  }
+  VXR_RETURN_IF_ERROR(r->pool_->pin_top_level());
+  return r;
+}
+
+VolumePlacement BrickRenderer::placement() const {
+  const VolumeInfo& info = src_.info();
+  return {{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])}, info.voxel_size};
+}
+
+LodView BrickRenderer::view_for(const Camera& camera, uint32_t width, uint32_t height) const {
+  const VoxelSpaceRays rays = rays_in_voxel_space(camera, placement(), width, height);
+  return {rays.eye, rays.forward, rays.right, rays.up, width, height};
+}
+
+Status BrickRenderer::ensure_target(uint32_t width, uint32_t height) {
+  if (target_.image && target_.extent.width == width && target_.extent.height == height) return Status::ok();
+  VXR_ASSIGN_OR_RETURN(target_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, VK_FORMAT_R8G8B8A8_UNORM,
+                                                         {width, height, 1},
+                                                         VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                                                         "brick raycast target"}));
+  VXR_ASSIGN_OR_RETURN(accum_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                                        {width, height, 1}, VK_IMAGE_USAGE_STORAGE_BIT,
+                                                        "brick raycast accumulation"}));
+  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+    gpu::transition_image(cmd, accum_, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }));
+  for (VkDescriptorSet set : {paged_set_, mono_set_}) {
+    gpu::write_storage_image(ctx_, set, 2, target_.view);
+    gpu::write_storage_image(ctx_, set, 3, accum_.view);
+  }
+  return Status::ok();
+}
+
+Status BrickRenderer::upload_transfer(const RaycastSettings& s) {
+  if (s.colormap == tf_key_) return Status::ok();
+  auto cmap = find_colormap(s.colormap);
+  if (!cmap) return invalid_argument("unknown colormap '" + s.colormap + "'");
+  std::vector<glm::vec4> table(256);
+  for (int i = 0; i < 256; ++i) table[i] = glm::vec4((*cmap)[i], static_cast<float>(i) / 255.0f);
+  VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, transfer_tex_, table.data(), table.size() * sizeof(glm::vec4)));
+  for (VkDescriptorSet set : {paged_set_, mono_set_})
+    gpu::write_combined_image(ctx_, set, 1, transfer_tex_.view, linear_);
+  tf_key_ = s.colormap;
+  return Status::ok();
+}
+
+void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
+                                const LodSettings& clip) const {
+  // Everything in double, then local (small) numbers to float.
+  const BrickBox box = chunk_box(src_, key);
+  const auto& ds_u = src_.levels()[key.level].downsample;
+  const glm::dvec3 ds(ds_u[0], ds_u[1], ds_u[2]);
+  glm::dvec3 lo(0.0), hi = (box.hi - box.lo) / ds;
+  if (clip.roi.enabled) {
+    lo = glm::max(lo, (clip.roi.lo - box.lo) / ds);
+    hi = glm::min(hi, (clip.roi.hi - box.lo) / ds);
+  }
+  shader::BrickRecord r{};
+  r.eye = v4((view.eye - box.lo) / ds);
+  r.scale = v4(1.0 / ds);
+  r.box_lo = v4(lo);
+  r.box_hi = v4(hi);
+  r.atlas = glm::vec4(atlas_origin, 0.0f);
+  if (clip.cut.enabled) {
+    // dot(n, lo0 + ds * p) + d  ->  dot(n * ds, p) + dot(n, lo0) + d, normalised.
+    const glm::dvec3 n = clip.cut.normal * ds;
+    const double len = glm::length(n);
+    if (len > 0) r.plane = v4(n / len, (glm::dot(clip.cut.normal, box.lo) + clip.cut.offset) / len);
+  }
+  std::memcpy(out, &r, sizeof(r));
+}
+
+Result<double> BrickRenderer::cast(VkDescriptorSet set, const LodView& view, const RaycastSettings& s,
+                                   uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
+                                   const std::vector<glm::uvec4>& rects, BrickFrameStats* stats) {
+  shader::BrickCastParams p{};
+  p.forward = v4(view.forward);
+  p.right = v4(view.right);
+  p.up = v4(view.up);
+  p.shading = glm::vec4(static_cast<float>(s.step_voxels), static_cast<float>(s.window_lo / value_scale_),
+                        static_cast<float>(s.window_hi / value_scale_), static_cast<float>(s.density));
+  p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z, 0.0f);
+  const uint32_t model = s.model == OpticalModel::kMip ? VXR_MODEL_MIP : VXR_MODEL_EMISSION_ABSORPTION;
+  const uint32_t w = view.width, h = view.height;
+  std::memset(counters_.mapped, 0, 16);
+  uint32_t dispatches = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+    gpu::transition_image(cmd, target_, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.pipeline);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout, 0, 1, &set, 0, nullptr);
+    auto dispatch = [&](uint32_t first, uint32_t count, glm::uvec4 rect, uint32_t flags) {
+      p.control = glm::uvec4(w, h, first, count);
+      p.pass = glm::uvec4(rect.x, rect.y, flags, model);
+      vkCmdPushConstants(cmd, pipeline_.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+      vkCmdDispatch(cmd, (rect.z + 7) / 8, (rect.w + 7) / 8, 1);
+      ++dispatches;
+    };
+    const glm::uvec4 full(0, 0, w, h);
+    if (mode == BrickPassMode::kSinglePass) {
+      dispatch(0, bricks, full, VXR_BRICK_STORE_FINAL);
+    } else {
+      dispatch(0, 0, full, VXR_BRICK_STORE_ACCUM);  // clear
+      for (uint32_t b = 0; b < bricks; ++b) {
+        if (rects[b].z == 0 || rects[b].w == 0) continue;
+        compute_barrier(cmd);
+        dispatch(b, 1, rects[b], VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM);
+      }
+      compute_barrier(cmd);
+      dispatch(0, 0, full, VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_FINAL);
+    }
+  }));
+  const double ms = ms_since(t0);
+  if (stats) {
+    uint32_t c[2];
+    std::memcpy(c, counters_.mapped, 8);
+    stats->samples = uint64_t(c[0]) | (uint64_t(c[1]) << 32);
+    stats->dispatches = dispatches;
+    stats->render_ms = ms;
+  }
+  return ms;
+}
+
+namespace {
+// Screen rectangle (pixels) a box covers; the whole image when it reaches behind the eye.
+glm::uvec4 screen_rect(const BrickBox& b, const LodView& v) {
+  const glm::dmat3 basis(v.forward, v.right, v.up);
+  const glm::dmat3 inv = glm::inverse(basis);
+  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+  for (int c = 0; c < 8; ++c) {
+    const glm::dvec3 p((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z);
+    const glm::dvec3 k = inv * (p - v.eye);  // p - eye = k.x f + k.y r + k.z u
+    if (k.x <= 1e-9) return {0, 0, v.width, v.height};
+    const double nx = k.y / k.x, ny = -k.z / k.x;
+    x0 = std::min(x0, nx), x1 = std::max(x1, nx), y0 = std::min(y0, ny), y1 = std::max(y1, ny);
+  }
+  auto px = [](double ndc, uint32_t n) { return (ndc + 1.0) * 0.5 * n - 0.5; };
+  const double ax = std::clamp(std::floor(px(x0, v.width)) - 1, 0.0, double(v.width));
+  const double bx = std::clamp(std::ceil(px(x1, v.width)) + 2, 0.0, double(v.width));
+  const double ay = std::clamp(std::floor(px(y0, v.height)) - 1, 0.0, double(v.height));
+  const double by = std::clamp(std::ceil(px(y1, v.height)) + 2, 0.0, double(v.height));
+  return {uint32_t(ax), uint32_t(ay), uint32_t(bx - ax), uint32_t(by - ay)};
+}
+}  // namespace
+
+Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RaycastSettings& s,
+                                         const BrickFrameSettings& frame, uint32_t width, uint32_t height,
+                                         BrickFrameStats* stats_out) {
+  VXR_TRACE_SCOPE("brick_renderer.render");
+  if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
+  if (!(s.step_voxels > 0.0)) return invalid_argument("render: step must be > 0 voxels");
+  if (!(s.window_hi > s.window_lo)) return invalid_argument("render: window lo must be below hi");
+  VXR_RETURN_IF_ERROR(ensure_target(width, height));
+  VXR_RETURN_IF_ERROR(upload_transfer(s));
+  BrickFrameStats st;
+  pool_->begin_frame();
+  const LodView view = view_for(camera, width, height);
+
+  auto t0 = std::chrono::steady_clock::now();
+  LodQueries q;
+  const double lo = s.window_lo;
+  q.visible = [lo](double, double hi) { return hi > lo; };  // the ramp is zero at and below the window's low end
+  q.resident = [this](const ChunkKey& k) { return pool_->resident(k); };
+  LodResult lod = traverse_lod(src_, view, frame.lod, q);
+  st.traverse_ms = ms_since(t0);
+  st.lod = lod.stats;
+  if (lod.draw.size() > opt_.max_bricks)
+    return out_of_range("render: the view needs " + std::to_string(lod.draw.size()) + " bricks, the brick table holds " +
+                        std::to_string(opt_.max_bricks) + "; raise the LOD bias or max_bricks");
+
+  std::vector<glm::uvec4> rects;
+  for (size_t i = 0; i < lod.draw.size(); ++i) {
+    const glm::uvec3 o = pool_->touch(lod.draw[i]);
+    fill_record(static_cast<uint8_t*>(table_.mapped) + i * sizeof(shader::BrickRecord), lod.draw[i], glm::vec3(o),
+                view, frame.lod);
+    if (frame.mode == BrickPassMode::kMultipass) rects.push_back(screen_rect(chunk_box(src_, lod.draw[i]), view));
+  }
+  const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;
+  st.hit_rate = wanted ? double(lod.stats.drawn - lod.stats.fallback) / double(wanted) : 1.0;
+
+  VXR_RETURN_IF_ERROR(cast(paged_set_, view, s, static_cast<uint32_t>(lod.draw.size()), pool_->atlas_texels(),
+                           frame.mode, rects, &st)
+                          .status());
+  // Uploads after the frame's rays: what arrives is drawn from the next frame on.
+  if (!lod.requests.empty()) {
+    VXR_ASSIGN_OR_RETURN(UploadStats up, pool_->upload(lod.requests, frame.upload_budget_bytes));
+    st.bytes_uploaded = up.bytes;
+    st.bricks_uploaded = up.bricks;
+    st.evicted = up.evicted;
+  }
+  ImageRgba8 img(width, height);
+  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, target_, img.pixels.data(), img.pixels.size()));
+  if (stats_out) *stats_out = st;
+  return img;
+}
+
+Status BrickRenderer::set_monolithic(uint32_t level) {
+  if (level >= src_.levels().size()) return invalid_argument("monolithic: no level " + std::to_string(level));
+  if (level == mono_level_) return Status::ok();
+  const LevelInfo& li = src_.levels()[level];
+  const uint32_t max3d = ctx_.limits().maxImageDimension3D;
+  for (uint64_t d : li.dims)
+    if (d > max3d)
+      return out_of_range("monolithic: level " + std::to_string(level) + " has a side of " + std::to_string(d) +
+                          " voxels, past the device's 3D texture limit of " + std::to_string(max3d));
+  const uint32_t tb = src_.info().dtype == DType::kU16 ? 2 : 1;
+  const uint64_t nx = li.dims[0], ny = li.dims[1], nz = li.dims[2];
+  std::vector<uint8_t> dense(nx * ny * nz * tb);
+  const uint32_t cs = src_.chunk_size(), a = src_.apron(), e = cs + 2 * a;
+  for (uint32_t cz = 0; cz < li.chunk_counts[2]; ++cz)
+    for (uint32_t cy = 0; cy < li.chunk_counts[1]; ++cy)
+      for (uint32_t cx = 0; cx < li.chunk_counts[0]; ++cx) {
+        VXR_ASSIGN_OR_RETURN(auto chunk, src_.read({level, cx, cy, cz, 0, 0}));
+        for (uint32_t z = 0; z < cs && uint64_t(cz) * cs + z < nz; ++z)
+          for (uint32_t y = 0; y < cs && uint64_t(cy) * cs + y < ny; ++y) {
+            const uint64_t gx = uint64_t(cx) * cs, gy = uint64_t(cy) * cs + y, gz = uint64_t(cz) * cs + z;
+            const uint64_t n = std::min<uint64_t>(cs, nx - gx);
+            std::memcpy(&dense[((gz * ny + gy) * nx + gx) * tb],
+                        &chunk->data[((uint64_t(z + a) * e + (y + a)) * e + a) * tb], n * tb);
+          }
+      }
+  const VkFormat format = tb == 2 ? VK_FORMAT_R16_UNORM : VK_FORMAT_R8_UNORM;
+  VXR_ASSIGN_OR_RETURN(mono_tex_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_3D, format,
+                                                           {uint32_t(nx), uint32_t(ny), uint32_t(nz)},
+                                                           VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                                           "monolithic volume"}));
+  VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, mono_tex_, dense.data(), dense.size()));
+  gpu::write_combined_image(ctx_, mono_set_, 0, mono_tex_.view, linear_);
+  mono_level_ = level;
+  return Status::ok();
+}
+
+Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const RaycastSettings& s,
+                                                    const LodSettings& clip, uint32_t width, uint32_t height,
+                                                    BrickFrameStats* stats_out) {
+  VXR_TRACE_SCOPE("brick_renderer.render_monolithic");
+  if (mono_level_ == UINT32_MAX) return invalid_argument("render_monolithic: call set_monolithic first");
+  VXR_RETURN_IF_ERROR(ensure_target(width, height));
+  VXR_RETURN_IF_ERROR(upload_transfer(s));
+  const LodView view = view_for(camera, width, height);
+  // One "brick": the whole level, local origin at voxel 0, no apron (the
+  // sampler's clamp-to-edge repeats the border voxels like an apron would).
+  const LevelInfo& li = src_.levels()[mono_level_];
+  const auto& ds_u = li.downsample;
+  const glm::dvec3 ds(ds_u[0], ds_u[1], ds_u[2]);
+  const glm::dvec3 dims0(src_.info().dims[0], src_.info().dims[1], src_.info().dims[2]);
+  glm::dvec3 lo(0.0), hi = dims0 / ds;
+  if (clip.roi.enabled) {
+    lo = glm::max(lo, clip.roi.lo / ds);
+    hi = glm::min(hi, clip.roi.hi / ds);
+  }
+  shader::BrickRecord r{};
+  r.eye = v4(view.eye / ds);
+  r.scale = v4(1.0 / ds);
+  r.box_lo = v4(lo);
+  r.box_hi = v4(hi);
+  r.atlas = glm::vec4(0.0f);
+  if (clip.cut.enabled) {
+    const glm::dvec3 n = clip.cut.normal * ds;
+    const double len = glm::length(n);
+    if (len > 0) r.plane = v4(n / len, clip.cut.offset / len);
+  }
+  std::memcpy(table_.mapped, &r, sizeof(r));
+  BrickFrameStats st;
+  st.lod.drawn = 1;
+  VXR_RETURN_IF_ERROR(cast(mono_set_, view, s, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
+                           BrickPassMode::kSinglePass, {}, &st)
+                          .status());
+  ImageRgba8 img(width, height);
+  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, target_, img.pixels.data(), img.pixels.size()));
+  if (stats_out) *stats_out = st;
+  return img;
+}
+
+}  // namespace vxr

@@ -1,0 +1,94 @@
+#version 450
+// Brick ray caster: each ray marches a front-to-back list of bricks from the
+// LOD traversal, restarting in each brick's local voxel coordinates at its
+// entry. Samples sit on a per-level grid anchored at the eye,
+// t_i = (i + 0.5) * dt, so bricks of one level continue each other exactly
+// and one brick covering the whole volume (the monolithic path) gives the same
+// samples as its pieces. One dispatch can march all bricks (single pass) or
+// one brick over its screen rectangle, continuing from the accumulation image
+// (the paper's multipass); see engine/render/lod/brick_renderer.h.
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/brick_params.h"
+#include "shared/raycast_params.h"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(binding = 0) uniform sampler3D atlas_tex;
+layout(binding = 1) uniform sampler2D transfer_tex;  // 256 x 1 RGBA: colour and opacity by value
+layout(binding = 2, rgba8) uniform writeonly image2D out_image;
+layout(binding = 3, rgba32f) uniform image2D accum_image;
+layout(std430, binding = 4) readonly buffer Bricks { BrickRecord bricks[]; };
+layout(std430, binding = 5) buffer Counters { uint samples_lo; uint samples_hi; };
+
+layout(push_constant) uniform Push { BrickCastParams p; };
+
+float windowed(float v) { return clamp((v - p.shading.y) / (p.shading.z - p.shading.y), 0.0, 1.0); }
+
+void main() {
+  uvec2 pix = gl_GlobalInvocationID.xy + p.pass.xy;
+  if (pix.x >= p.control.x || pix.y >= p.control.y) return;
+  const uint flags = p.pass.z;
+  const bool mip = p.pass.w == VXR_MODEL_MIP;
+
+  vec2 ndc = (vec2(pix) + 0.5) / vec2(p.control.xy) * 2.0 - 1.0;
+  vec3 dir = normalize(p.forward.xyz + ndc.x * p.right.xyz - ndc.y * p.up.xyz);
+
+  vec4 acc = vec4(0.0);  // premultiplied colour + alpha; for MIP, a = the largest windowed value
+  if ((flags & VXR_BRICK_LOAD_ACCUM) != 0u) acc = imageLoad(accum_image, ivec2(pix));
+  uint taken = 0u;
+
+  const uint last = p.control.z + p.control.w;
+  for (uint b = p.control.z; b < last; ++b) {
+    if (!mip && acc.a >= 0.995) break;  // early ray termination
+    const vec3 e = bricks[b].eye.xyz;
+    const vec3 origin = bricks[b].atlas.xyz;
+    const vec3 dl = dir * bricks[b].scale.xyz;  // local voxels per unit t (t in level-0 voxels)
+    // Slab test; NaN from 0 * inf is dropped by min/max.
+    const vec3 inv = 1.0 / dl;
+    const vec3 ta = (bricks[b].box_lo.xyz - e) * inv;
+    const vec3 tb = (bricks[b].box_hi.xyz - e) * inv;
+    const vec3 tmin = min(ta, tb), tmax = max(ta, tb);
+    float t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
+    float t1 = min(min(tmax.x, tmax.y), tmax.z);
+    const vec4 pl = bricks[b].plane;
+    if (pl.xyz != vec3(0.0)) {
+      const float num = dot(pl.xyz, e) + pl.w, den = dot(pl.xyz, dl);
+      if (den > 0.0) t0 = max(t0, -num / den);
+      else if (den < 0.0) t1 = min(t1, -num / den);
+      else if (num < 0.0) continue;
+    }
+    if (!(t1 > t0)) continue;
+    const float dt = p.shading.x / length(dl);  // one local step, in t units
+    const float i0 = ceil(t0 / dt - 0.5);
+    const int n = int(ceil(t1 / dt - 0.5) - i0);
+    for (int k = 0; k < n; ++k) {
+      const float t = (i0 + float(k) + 0.5) * dt;  // from the index: no drift
+      const vec3 pos = e + t * dl;
+      const float v = windowed(texture(atlas_tex, (origin + pos) * p.atlas_inv.xyz).r);
+      ++taken;
+      if (mip) {
+        acc.a = max(acc.a, v);
+      } else {
+        const vec4 tf = texture(transfer_tex, vec2(v, 0.5));
+        const float tau = tf.a * p.shading.w * dt;
+        // 1 - exp(-tau), with the series for small tau so faint tissue survives float32.
+        const float a = tau < 1e-3 ? tau * (1.0 - 0.5 * tau) : 1.0 - exp(-tau);
+        acc.rgb += (1.0 - acc.a) * a * tf.rgb;
+        acc.a += (1.0 - acc.a) * a;
+        if (acc.a >= 0.995) break;
+      }
+    }
+  }
+
+  if (taken > 0u) {
+    const uint old = atomicAdd(samples_lo, taken);
+    if (old + taken < old) atomicAdd(samples_hi, 1u);
+  }
+  if ((flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), acc);
+  if ((flags & VXR_BRICK_STORE_FINAL) != 0u) {
+    vec4 result = acc;
+    if (mip) result = vec4(texture(transfer_tex, vec2(acc.a, 0.5)).rgb * acc.a, acc.a);
+    imageStore(out_image, ivec2(pix), result);
+  }
+}

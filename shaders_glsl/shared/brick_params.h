@@ -1,0 +1,47 @@
+// Layouts of brick_raycast.comp, shared by GLSL and C++: the per-brick table
+// (a storage buffer the CPU writes each frame) and the push constants.
+// Only vec4/uvec4 members, so std430 and C++ agree on offsets.
+#ifndef VXR_BRICK_PARAMS_H
+#define VXR_BRICK_PARAMS_H
+
+#ifdef __cplusplus
+#include <glm/glm.hpp>
+namespace vxr::shader {
+using vec4 = glm::vec4;
+using uvec4 = glm::uvec4;
+#endif
+
+// pass.z flags
+#define VXR_BRICK_LOAD_ACCUM 1u   // continue the rays from the accumulation image
+#define VXR_BRICK_STORE_ACCUM 2u  // write the rays' state to the accumulation image
+#define VXR_BRICK_STORE_FINAL 4u  // write the finished premultiplied RGBA8 pixel
+
+// One brick to march, everything in its own local voxels (level-l voxels,
+// origin at the brick's interior corner): the CPU computes these in double,
+// so the GPU never sees a large coordinate.
+struct BrickRecord {
+  vec4 eye;     // xyz: eye position in local voxels
+  vec4 scale;   // xyz: local voxels per level-0 voxel along each axis (1 / downsample)
+  vec4 box_lo;  // xyz: where marching starts being allowed (0, or the ROI), local voxels
+  vec4 box_hi;  // xyz: the brick's extent clipped to the volume and the ROI
+  vec4 atlas;   // xyz: atlas texel coordinate of the local origin
+  vec4 plane;   // cut plane in local voxels: keep dot(xyz, p) + w >= 0; xyz = 0: none
+};
+
+struct BrickCastParams {
+  vec4 forward;    // xyz: ray direction through the image centre, level-0 voxel space
+  vec4 right;      // xyz: +x of the image at unit distance
+  vec4 up;         // xyz: +y of the image at unit distance
+  vec4 shading;    // x: step (local voxels), y/z: window lo/hi (0..1 texel units), w: extinction per level-0 voxel
+  uvec4 control;   // x: image width, y: image height, z: first brick, w: brick count
+  uvec4 pass;      // xy: pixel offset of this dispatch, z: flags, w: optical model (raycast_params.h)
+  vec4 atlas_inv;  // xyz: 1 / atlas size in texels
+};
+
+#ifdef __cplusplus
+static_assert(sizeof(BrickRecord) == 96, "brick record layout");
+static_assert(sizeof(BrickCastParams) == 112, "push constants must stay within 128 bytes");
+}  // namespace vxr::shader
+#endif
+
+#endif
