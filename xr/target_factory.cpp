@@ -1,16 +1,64 @@
 #include "xr/target_factory.h"
 
-namespace vxr::xr {
+#include "xr/desktop/desktop_target.h"
+#include "xr/openxr/openxr_target.h"
 
-Result<TargetChoice> choose_target(const TargetRequest& request) {
-  TargetChoice c;
-  const HeadlessOptions headless = request.headless;
-  c.kind = TargetKind::kHeadless;
-  c.reason = "using headless";
-  c.factory = [headless]() -> Result<std::unique_ptr<FrameTarget>> {
-    return std::unique_ptr<FrameTarget>(new HeadlessTarget(headless));
+namespace vxr::xr {
+namespace {
+
+TargetFactory openxr_factory(const TargetRequest& r) {
+  OpenXrOptions o;
+  o.max_eye_width = r.max_eye_width;
+  o.max_eye_height = r.max_eye_height;
+  return [o]() -> Result<std::unique_ptr<FrameTarget>> {
+    auto t = OpenXrTarget::create(o);
+    if (!t) return t.status();
+    return std::unique_ptr<FrameTarget>(std::move(t).value());
   };
-  return c;
+}
+
+TargetFactory desktop_factory(const TargetRequest& r) {
+  DesktopOptions o;
+  o.width = r.headless.script.width;
+  o.height = r.headless.script.height;
+  o.fov = r.headless.script.fov;
+  o.stereo = r.desktop_stereo;
+  o.end_frame = r.headless.end_frame;
+  o.screenshot_path = r.desktop_screenshot;
+  return [o]() -> Result<std::unique_ptr<FrameTarget>> {
+    auto t = DesktopTarget::create(o);
+    if (!t) return t.status();
+    return std::unique_ptr<FrameTarget>(std::move(t).value());
+  };
+}
+
+TargetFactory headless_factory(const TargetRequest& r) {
+  const HeadlessOptions o = r.headless;
+  return [o]() -> Result<std::unique_ptr<FrameTarget>> { return std::unique_ptr<FrameTarget>(new HeadlessTarget(o)); };
+}
+
+}  // namespace
+
+Result<TargetChoice> choose_target(const TargetRequest& r) {
+  TargetChoice c;
+  switch (r.kind) {
+    case TargetKind::kOpenXr:
+      return TargetChoice{TargetKind::kOpenXr, "using OpenXR (--xr)", openxr_factory(r)};
+    case TargetKind::kDesktop: {
+      if (Status s = desktop_available(); !s) return s;
+      return TargetChoice{TargetKind::kDesktop, "using the desktop window (--desktop)", desktop_factory(r)};
+    }
+    case TargetKind::kHeadless:
+      return TargetChoice{TargetKind::kHeadless, "using headless (--headless)", headless_factory(r)};
+    case TargetKind::kAuto: break;
+  }
+  auto xr = probe_openxr();
+  if (xr) return TargetChoice{TargetKind::kOpenXr, "using " + *xr, openxr_factory(r)};
+  const std::string no_xr = "no OpenXR headset: " + xr.status().message();
+  Status desk = desktop_available();
+  if (desk) return TargetChoice{TargetKind::kDesktop, "using the desktop window (" + no_xr + ")", desktop_factory(r)};
+  return TargetChoice{TargetKind::kHeadless, "using headless (" + no_xr + "; no desktop: " + desk.message() + ")",
+                      headless_factory(r)};
 }
 
 }  // namespace vxr::xr

@@ -35,7 +35,10 @@ Result<Outcome> run_once(FrameTarget& target, const DenseVolume& volume, const V
     VXR_TRACE_SCOPE("xr.frame");
     auto frame = target.wait_frame();
     if (!frame) return target.wants_restart() ? Result<Outcome>(Outcome::kRestart) : frame.status();
-    if (frame->exit) return Outcome::kDone;
+    if (frame->exit) {
+      stats.target = target.describe();
+      return Outcome::kDone;
+    }
     const auto t0 = std::chrono::steady_clock::now();
 
     const auto started = grab.update(frame->input, stats.transform);

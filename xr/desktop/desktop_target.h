@@ -1,0 +1,79 @@
+// A desktop window (GLFW + a Vulkan swapchain) as a FrameTarget.
+//
+// Stands alone with mouse/keyboard navigation: left-drag orbits about the
+// volume, the scroll wheel zooms, W/A/S/D fly, Q/E go down/up, Esc closes.
+// --stereo shows both eyes side by side (the paper's on-monitor side-by-side
+// picture). The eye images are ordinary device images; end_frame blits them
+// into the window's swapchain image and presents.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "gpu/resources.h"
+#include "xr/frame_target.h"
+
+struct GLFWwindow;
+
+namespace vxr::xr {
+
+struct DesktopOptions {
+  uint32_t width = 256, height = 256;  // per eye
+  Fov fov;                              // vertical from up/down; horizontal follows the aspect
+  bool stereo = false;
+  double ipd_m = 0.064;
+  uint64_t end_frame = 0;               // close after this many frames; 0: when the window is closed
+  std::string screenshot_path;          // at exit, grab the window from the X server into this PNG
+};
+
+// Why there is no usable window system (no DISPLAY, GLFW or Vulkan surface
+// support missing), or ok.
+Status desktop_available();
+
+class DesktopTarget : public FrameTarget {
+ public:
+  static Result<std::unique_ptr<DesktopTarget>> create(const DesktopOptions& options);
+  ~DesktopTarget() override;
+
+  std::string describe() const override;
+  Status prepare_context(gpu::ContextOptions& options) override;
+  Status attach(gpu::Context& ctx) override;
+  Result<FrameState> wait_frame() override;
+  Result<TargetImage> acquire(size_t view) override;
+  Status end_frame(const FrameState& frame, const FrameContent& content) override;
+  void request_exit() override { exit_requested_ = true; }
+  void detach() override;
+
+  // Mouse and keyboard navigation (called from GLFW callbacks).
+  void on_drag(double dx, double dy);
+  void on_scroll(double dy);
+
+ private:
+  explicit DesktopTarget(const DesktopOptions& o) : o_(o) {}
+  Status create_swapchain();
+  void destroy_swapchain();
+  Status screenshot();
+  Pose head_pose() const;
+
+  DesktopOptions o_;
+  GLFWwindow* window_ = nullptr;
+  gpu::Context* ctx_ = nullptr;
+  VkSurfaceKHR surface_ = VK_NULL_HANDLE;
+  VkSwapchainKHR swapchain_ = VK_NULL_HANDLE;
+  VkFormat swap_format_ = VK_FORMAT_UNDEFINED;
+  VkExtent2D swap_extent_{0, 0};
+  std::vector<VkImage> swap_images_;
+  std::vector<gpu::Handle<VkSemaphore>> render_done_;  // one per swapchain image
+  gpu::Handle<VkSemaphore> acquired_;
+  gpu::Handle<VkFence> fence_;
+  gpu::Handle<VkCommandPool> pool_;
+  std::vector<gpu::Image> eyes_;
+  uint64_t frame_ = 0;
+  bool exit_requested_ = false;
+  // Navigation: orbit about `focus_` at `distance_`, yaw/pitch in radians.
+  glm::dvec3 focus_{0.0, 1.6, -0.5};
+  double yaw_ = 0.0, pitch_ = 0.0, distance_ = 0.5;
+  bool have_focus_ = false;
+};
+
+}  // namespace vxr::xr
