@@ -25,8 +25,8 @@ struct Options {
   std::string png_dir;
   bool png_every_frame = false;
   bool lens_warp = false;
-  bool mirror = false;
   bool stereo = false;
+  std::string screenshot;
   uint32_t width = 0, height = 0;
 };
 
@@ -59,7 +59,9 @@ int run(const Options& o) {
   req.headless.png_every_frame = o.png_every_frame;
   if (o.frames) req.headless.end_frame = o.frames;
   req.desktop_stereo = o.stereo;
-  req.desktop_mirror = o.mirror;
+  req.desktop_screenshot = o.screenshot;
+  req.max_eye_width = o.width;
+  req.max_eye_height = o.height;
 
   auto choice = xr::choose_target(req);
   if (!choice) return fail(choice.status(), kExitFailure);
@@ -98,11 +100,11 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--script", o->script, "headless: pose script (JSON; see xr/script.h)");
   cmd->add_option("--png-dir", o->png_dir, "headless: write the eye images of the last frame here");
   cmd->add_flag("--png-every-frame", o->png_every_frame, "headless: write every frame's eye images");
-  cmd->add_option("--width", o->width, "headless/desktop eye width in pixels")->check(CLI::Range(1, 4096));
-  cmd->add_option("--height", o->height, "headless/desktop eye height in pixels")->check(CLI::Range(1, 4096));
+  cmd->add_option("--width", o->width, "eye width in pixels (OpenXR: at most this)")->check(CLI::Range(1, 4096));
+  cmd->add_option("--height", o->height, "eye height in pixels (OpenXR: at most this)")->check(CLI::Range(1, 4096));
   cmd->add_flag("--lens-warp", o->lens_warp, "cast rays on the lens-warped grid (denser at each eye's centre)");
   cmd->add_flag("--stereo", o->stereo, "desktop: side-by-side stereo");
-  cmd->add_flag("--mirror", o->mirror, "OpenXR: also show the eye images in a desktop window");
+  cmd->add_option("--screenshot", o->screenshot, "desktop: at exit, save what the X server shows in the window (PNG)");
   cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
 }
 

@@ -17,6 +17,7 @@ Result<Outcome> run_once(FrameTarget& target, const DenseVolume& volume, const V
   gpu::ContextOptions copts = gpu::ContextOptions::from_env();
   VXR_RETURN_IF_ERROR(target.prepare_context(copts));
   VXR_ASSIGN_OR_RETURN(std::unique_ptr<gpu::Context> ctx, gpu::Context::create(copts));
+  stats.device_fingerprint = ctx->info().fingerprint();
   // Everything tied to the device goes before it: renderer, then the target's objects.
   struct Detach {
     FrameTarget& t;

@@ -37,6 +37,7 @@ struct ViewOptions {
 
 struct ViewStats {
   std::string target;          // describe() of the last target
+  std::string device_fingerprint;  // of the Vulkan device the frames were rendered on
   uint64_t frames_rendered = 0;
   uint64_t frames_submitted = 0;  // including frames the runtime said not to render
   int restarts = 0;

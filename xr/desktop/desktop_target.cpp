@@ -129,7 +129,8 @@ Status DesktopTarget::attach(gpu::Context& ctx) {
                                                      VK_IMAGE_USAGE_SAMPLED_BIT,
                                                  "desktop eye"}));
     VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-      image_barrier(cmd, img.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+      image_barrier(cmd, img.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                    VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
     }));
     eyes_.push_back(std::move(img));
   }
@@ -243,7 +244,8 @@ Result<FrameState> DesktopTarget::wait_frame() {
 Result<TargetImage> DesktopTarget::acquire(size_t view) {
   if (view >= eyes_.size()) return out_of_range("the desktop window has " + std::to_string(eyes_.size()) + " views");
   const gpu::Image& e = eyes_[view];
-  return TargetImage{e.image, e.format, {e.extent.width, e.extent.height}, VK_IMAGE_LAYOUT_GENERAL};
+  // Eye images rest in TRANSFER_SRC_OPTIMAL: end_frame blits from them.
+  return TargetImage{e.image, e.format, {e.extent.width, e.extent.height}, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL};
 }
 
 Status DesktopTarget::end_frame(const FrameState& frame, const FrameContent& content) {
@@ -279,7 +281,7 @@ Status DesktopTarget::end_frame(const FrameState& frame, const FrameContent& con
     blit.srcOffsets[1] = {int32_t(o_.width), int32_t(o_.height), 1};
     blit.dstOffsets[0] = {int32_t(v) * slot_w, 0, 0};
     blit.dstOffsets[1] = {int32_t(v + 1) * slot_w, int32_t(swap_extent_.height), 1};
-    vkCmdBlitImage(cmd, eyes_[v].image, VK_IMAGE_LAYOUT_GENERAL, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
+    vkCmdBlitImage(cmd, eyes_[v].image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
                    VK_FILTER_LINEAR);
   }
   image_barrier(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,

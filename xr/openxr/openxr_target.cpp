@@ -466,7 +466,13 @@ void OpenXrTarget::detach() {
   depth_.clear();
   if (space_) xrDestroySpace(space_);
   space_ = XR_NULL_HANDLE;
-  if (session_) xrDestroySession(session_);
+  if (session_ && XR_FAILED(xrDestroySession(session_)) && instance_) {
+    // The session (and the swapchain images it holds on our device) must go
+    // before the device does; destroying the instance destroys all its children.
+    log_warn("OpenXR: xrDestroySession failed; destroying the instance to release the session");
+    xrDestroyInstance(instance_);
+    instance_ = XR_NULL_HANDLE;
+  }
   session_ = XR_NULL_HANDLE;
   running_ = false;
   frame_begun_ = false;

@@ -169,9 +169,11 @@ XrResult enter(const char* fn) {
     static std::set<std::string> logged;
     if (logged.insert(fn).second) std::ofstream(c.call_log, std::ios::app) << fn << "\n";
   }
+  long call = 0;  // this call's number, counted only for functions that have a failure planned
   for (const FailSpec& f : c.fails) {
     if (f.function != fn) continue;
-    if (bump_env(std::string("VXR_TEST_RUNTIME_CALLS_") + fn) == f.call) return f.result;
+    if (call == 0) call = bump_env(std::string("VXR_TEST_RUNTIME_CALLS_") + fn);
+    if (call == f.call) return f.result;
   }
   return XR_SUCCESS;
 }

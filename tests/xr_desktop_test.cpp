@@ -1,0 +1,46 @@
+// The desktop window under Xvfb: vxr opens it, presents, and what the X
+// server shows in the window (grabbed with XGetImage) is the volume, pixel
+// for pixel what the same view renders offscreen.
+#include <doctest/doctest.h>
+
+#include "assets/assets.h"
+#include "golden.h"
+#include "gpu_fixture.h"
+#include "xr/eye_renderer.h"
+#include "xr/view_session.h"
+#include "xr_test_util.h"
+
+using namespace vxr;
+using namespace vxr::xr;
+
+TEST_CASE("desktop: the window opens under Xvfb and the screenshot shows the volume") {
+  test::GpuTestScope scope;
+  const std::string dir = test::xr_out_dir("desktop");
+  const std::string shot = dir + "/screenshot.png";
+  const test::ChildResult r = test::run_child("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(VXR_BINARY) +
+                                              " view --sample --desktop --frames 3 --width 128 --height 128"
+                                              " --screenshot " + shot);
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.output.find("using the desktop window") != std::string::npos);
+  auto img = read_png(shot);
+  REQUIRE(img.is_ok());
+  REQUIRE(img->width == 128);
+  REQUIRE(img->height == 128);
+  CHECK(test::looks_non_blank(*img));
+
+  // The same view offscreen: head at the start pose looking at the volume, +-40 degrees.
+  auto volume = assets::sample_volume();
+  REQUIRE(volume.is_ok());
+  auto eyes = EyeRenderer::create(test::gpu_context(), *volume);
+  REQUIRE(eyes.is_ok());
+  ViewSpec view;
+  view.pose.position = {0.0, 1.6, 0.0};
+  view.fov = {-0.6981317, 0.6981317, 0.6981317, -0.6981317};
+  view.width = view.height = 128;
+  auto expected = (*eyes)->render(view, default_volume_transform((*eyes)->placement()), default_view_settings(), {});
+  REQUIRE(expected.is_ok());
+  const test::ImageDiff d = test::diff_images(over_black(*expected), *img);
+  MESSAGE("screenshot vs offscreen: max " << d.max_abs << ", differing pixels " << d.differing);
+  CHECK(d.max_abs <= 1);
+}
