@@ -44,3 +44,31 @@ TEST_CASE("desktop: the window opens under Xvfb and the screenshot shows the vol
   MESSAGE("screenshot vs offscreen: max " << d.max_abs << ", differing pixels " << d.differing);
   CHECK(d.max_abs <= 1);
 }
+
+TEST_CASE("desktop: --mirror shows exactly what the headset's swapchain images hold") {
+  const std::string dir = test::xr_out_dir("mirror");
+  test::use_test_runtime(dir, R"({"view": {"width": 64, "height": 64}, "dump_frames": [3]})");
+  const std::string shot = dir + "/mirror.png";
+  const test::ChildResult r = test::run_child("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(VXR_BINARY) +
+                                              " view --sample --xr --mirror --frames 3 --width 64 --height 64"
+                                              " --screenshot " + shot);
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.output.find("mirrored to a desktop window 128x64") != std::string::npos);
+  auto window = read_png(shot);
+  REQUIRE(window.is_ok());
+  REQUIRE(window->width == 128);
+  REQUIRE(window->height == 64);
+  for (int eye = 0; eye < 2; ++eye) {
+    auto swap = read_png(dir + "/dump/frame000003_" + (eye == 0 ? "left" : "right") + ".png");
+    REQUIRE(swap.is_ok());
+    CHECK(test::looks_non_blank(*swap));
+    int max_abs = 0;
+    for (uint32_t y = 0; y < 64; ++y)
+      for (uint32_t x = 0; x < 64; ++x)
+        for (int c = 0; c < 3; ++c)
+          max_abs = std::max(max_abs, std::abs(int(window->at(eye * 64 + x, y)[c]) - int(swap->at(x, y)[c])));
+    CHECK(max_abs == 0);
+  }
+  CHECK(test::core_validation_messages(dir).empty());
+}

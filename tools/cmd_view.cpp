@@ -27,6 +27,7 @@ struct Options {
   bool lens_warp = false;
   bool stereo = false;
   std::string screenshot;
+  bool mirror = false;
   uint32_t width = 0, height = 0;
 };
 
@@ -60,6 +61,7 @@ int run(const Options& o) {
   if (o.frames) req.headless.end_frame = o.frames;
   req.desktop_stereo = o.stereo;
   req.desktop_screenshot = o.screenshot;
+  req.mirror = o.mirror;
   req.max_eye_width = o.width;
   req.max_eye_height = o.height;
 
@@ -104,7 +106,8 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--height", o->height, "eye height in pixels (OpenXR: at most this)")->check(CLI::Range(1, 4096));
   cmd->add_flag("--lens-warp", o->lens_warp, "cast rays on the lens-warped grid (denser at each eye's centre)");
   cmd->add_flag("--stereo", o->stereo, "desktop: side-by-side stereo");
-  cmd->add_option("--screenshot", o->screenshot, "desktop: at exit, save what the X server shows in the window (PNG)");
+  cmd->add_flag("--mirror", o->mirror, "OpenXR: also show both eyes in a desktop window");
+  cmd->add_option("--screenshot", o->screenshot, "desktop/mirror: at exit, save what the X server shows in the window (PNG)");
   cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
 }
 

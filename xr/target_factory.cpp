@@ -1,23 +1,13 @@
 #include "xr/target_factory.h"
 
 #include "xr/desktop/desktop_target.h"
+#include "xr/desktop/mirror_target.h"
 #include "xr/openxr/openxr_target.h"
 
 namespace vxr::xr {
 namespace {
 
-TargetFactory openxr_factory(const TargetRequest& r) {
-  OpenXrOptions o;
-  o.max_eye_width = r.max_eye_width;
-  o.max_eye_height = r.max_eye_height;
-  return [o]() -> Result<std::unique_ptr<FrameTarget>> {
-    auto t = OpenXrTarget::create(o);
-    if (!t) return t.status();
-    return std::unique_ptr<FrameTarget>(std::move(t).value());
-  };
-}
-
-TargetFactory desktop_factory(const TargetRequest& r) {
+DesktopOptions desktop_options(const TargetRequest& r) {
   DesktopOptions o;
   o.width = r.headless.script.width;
   o.height = r.headless.script.height;
@@ -25,6 +15,30 @@ TargetFactory desktop_factory(const TargetRequest& r) {
   o.stereo = r.desktop_stereo;
   o.end_frame = r.headless.end_frame;
   o.screenshot_path = r.desktop_screenshot;
+  return o;
+}
+
+TargetFactory openxr_factory(const TargetRequest& r) {
+  OpenXrOptions o;
+  o.max_eye_width = r.max_eye_width;
+  o.max_eye_height = r.max_eye_height;
+  const bool mirror = r.mirror;
+  o.readable = mirror;
+  DesktopOptions window = desktop_options(r);
+  window.stereo = true;  // both eyes side by side
+  window.end_frame = 0;
+  return [o, mirror, window]() -> Result<std::unique_ptr<FrameTarget>> {
+    auto t = OpenXrTarget::create(o);
+    if (!t) return t.status();
+    if (!mirror) return std::unique_ptr<FrameTarget>(std::move(t).value());
+    auto w = DesktopTarget::create(window);
+    if (!w) return w.status();
+    return std::unique_ptr<FrameTarget>(new MirrorTarget(std::move(t).value(), std::move(w).value()));
+  };
+}
+
+TargetFactory desktop_factory(const TargetRequest& r) {
+  const DesktopOptions o = desktop_options(r);
   return [o]() -> Result<std::unique_ptr<FrameTarget>> {
     auto t = DesktopTarget::create(o);
     if (!t) return t.status();

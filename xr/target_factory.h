@@ -15,6 +15,7 @@ struct TargetRequest {
   TargetKind kind = TargetKind::kAuto;
   HeadlessOptions headless;     // also gives desktop its eye size and fov
   bool desktop_stereo = false;  // side-by-side
+  bool mirror = false;              // OpenXR: also show the eye images in a desktop window
   std::string desktop_screenshot;  // desktop: grab the window from the X server into this PNG at exit
   uint32_t max_eye_width = 0, max_eye_height = 0;  // OpenXR: clamp the runtime's eye size
 };

@@ -255,6 +255,19 @@ Status DesktopTarget::end_frame(const FrameState& frame, const FrameContent& con
     have_focus_ = true;
   }
   if (!frame.should_render) return Status::ok();
+  std::vector<TargetImage> sources;
+  for (const gpu::Image& e : eyes_)
+    sources.push_back({e.image, e.format, {e.extent.width, e.extent.height}, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL});
+  return present(sources);
+}
+
+bool DesktopTarget::poll() {
+  glfwPollEvents();
+  if (glfwGetKey(window_, GLFW_KEY_ESCAPE) == GLFW_PRESS) glfwSetWindowShouldClose(window_, GLFW_TRUE);
+  return !glfwWindowShouldClose(window_);
+}
+
+Status DesktopTarget::present(const std::vector<TargetImage>& sources) {
   uint32_t index = 0;
   VkResult r = vkAcquireNextImageKHR(ctx_->device(), swapchain_, UINT64_MAX, acquired_, VK_NULL_HANDLE, &index);
   if (r == VK_ERROR_OUT_OF_DATE_KHR) {
@@ -274,15 +287,21 @@ Status DesktopTarget::end_frame(const FrameState& frame, const FrameContent& con
   VXR_VK_TRY(vkBeginCommandBuffer(cmd, &bi));
   const VkImage target = swap_images_[index];
   image_barrier(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-  const int32_t slot_w = int32_t(swap_extent_.width / eyes_.size());
-  for (size_t v = 0; v < eyes_.size(); ++v) {
+  const int32_t slot_w = int32_t(swap_extent_.width / std::max<size_t>(1, sources.size()));
+  for (size_t v = 0; v < sources.size(); ++v) {
+    const TargetImage& src = sources[v];
+    const bool move = src.layout != VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL && src.layout != VK_IMAGE_LAYOUT_GENERAL;
+    if (move)
+      image_barrier(cmd, src.image, VK_IMAGE_ASPECT_COLOR_BIT, src.layout, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
     VkImageBlit blit{};
     blit.srcSubresource = blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    blit.srcOffsets[1] = {int32_t(o_.width), int32_t(o_.height), 1};
+    blit.srcOffsets[1] = {int32_t(src.extent.width), int32_t(src.extent.height), 1};
     blit.dstOffsets[0] = {int32_t(v) * slot_w, 0, 0};
     blit.dstOffsets[1] = {int32_t(v + 1) * slot_w, int32_t(swap_extent_.height), 1};
-    vkCmdBlitImage(cmd, eyes_[v].image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
-                   VK_FILTER_LINEAR);
+    vkCmdBlitImage(cmd, src.image, move ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL : src.layout, target,
+                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, VK_FILTER_LINEAR);
+    if (move)
+      image_barrier(cmd, src.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, src.layout);
   }
   image_barrier(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                 VK_IMAGE_LAYOUT_PRESENT_SRC_KHR);
@@ -327,6 +346,7 @@ Status DesktopTarget::end_frame(const FrameState& frame, const FrameContent& con
 
 // What the X server shows in the window (not our own copy of it).
 Status DesktopTarget::screenshot() {
+  if (o_.screenshot_path.empty() || !ctx_) return Status::ok();
   vkQueueWaitIdle(ctx_->queue());
   Display* dpy = glfwGetX11Display();
   const Window win = glfwGetX11Window(window_);

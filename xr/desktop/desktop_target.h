@@ -48,11 +48,18 @@ class DesktopTarget : public FrameTarget {
   void on_drag(double dx, double dy);
   void on_scroll(double dy);
 
+  // Mirror use (MirrorTarget): blit `sources` (images on the same device, in
+  // their stated layouts, left to right) into the window and present.
+  Status present(const std::vector<TargetImage>& sources);
+  // Polls window events; false once the user closed the window.
+  bool poll();
+  // Grabs what the X server shows in the window into options.screenshot_path.
+  Status screenshot();
+
  private:
   explicit DesktopTarget(const DesktopOptions& o) : o_(o) {}
   Status create_swapchain();
   void destroy_swapchain();
-  Status screenshot();
   Pose head_pose() const;
 
   DesktopOptions o_;

@@ -244,8 +244,9 @@ Status OpenXrTarget::create_swapchains() {
     uint32_t w = config_views_[v].recommendedImageRectWidth, h = config_views_[v].recommendedImageRectHeight;
     if (o_.max_eye_width) w = std::min(w, o_.max_eye_width);
     if (o_.max_eye_height) h = std::min(h, o_.max_eye_height);
-    VXR_RETURN_IF_ERROR(make(color, XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT, w, h,
-                             color_[v]));
+    XrSwapchainUsageFlags usage = XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT;
+    if (o_.readable) usage |= XR_SWAPCHAIN_USAGE_TRANSFER_SRC_BIT;
+    VXR_RETURN_IF_ERROR(make(color, usage, w, h, color_[v]));
     if (depth_enabled_)
       VXR_RETURN_IF_ERROR(make(depth,
                                XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT,

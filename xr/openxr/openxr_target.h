@@ -28,6 +28,7 @@ namespace vxr::xr {
 struct OpenXrOptions {
   uint32_t max_eye_width = 0, max_eye_height = 0;  // clamp the runtime's recommended size; 0: no clamp
   bool use_depth = true;                           // depth swapchains when the runtime offers them
+  bool readable = false;                           // colour images may be copied from (desktop mirror)
 };
 
 class OpenXrTarget : public FrameTarget {
