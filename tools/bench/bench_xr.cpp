@@ -47,10 +47,13 @@ int run(const Options& o) {
   const RaycastSettings settings = xr::default_view_settings();
   const xr::Fov fov{-0.785398, 0.698132, 0.785398, -0.785398};  // a typical asymmetric left-eye fov
   const glm::dvec3 c = t.position;
-  const xr::Pose heads[] = {look_at({0.0, 1.6, 0.0}, c), look_at({-0.35, 1.7, -0.2}, c), look_at({0.1, 1.5, -0.25}, c)};
+  // Far (the head well inside the centre band), close and close-oblique (it fills the outer bands).
+  const xr::Pose heads[] = {look_at({0.0, 1.6, 0.0}, c), look_at({0.03, 1.62, -0.3}, c),
+                            look_at({-0.15, 1.7, -0.28}, c)};
 
-  uint64_t rays_full = 0, rays_warp = 0, channels = 0;
-  double abs_sum = 0.0, full_ms = 0.0, warp_ms = 0.0;
+  uint64_t rays_full = 0, rays_warp = 0, channels = 0, outer_channels = 0;
+  double abs_sum = 0.0, outer_sum = 0.0, full_ms = 0.0, warp_ms = 0.0;
+  const xr::WarpAxis axis = xr::warp_axis(o.size, o.warp);
   int max_abs = 0, renders = 0;
   xr::LensWarp none;
   for (const xr::Pose& head : heads) {
@@ -75,6 +78,12 @@ int run(const Options& o) {
         abs_sum += d;
         max_abs = std::max(max_abs, d);
         ++channels;
+        const uint32_t x = uint32_t(i / 4 % o.size), y = uint32_t(i / 4 / o.size);
+        const auto outer = [&](uint32_t p) { return p < axis.edge_full || p >= axis.edge_full + axis.centre; };
+        if (outer(x) || outer(y)) {
+          outer_sum += d;
+          ++outer_channels;
+        }
       }
     }
   }
@@ -89,6 +98,7 @@ int run(const Options& o) {
   j["mean_abs_error"] = abs_sum / double(channels) / 255.0;
   j["mean_abs_error_8bit"] = abs_sum / double(channels);
   j["max_abs_error_8bit"] = max_abs;
+  j["mean_abs_error_outer_bands_8bit"] = outer_channels ? outer_sum / double(outer_channels) : 0.0;
   j["full_ms_per_eye"] = full_ms / renders;
   j["warped_ms_per_eye"] = warp_ms / renders;
   j["note"] = "error: RGB over black vs the full-resolution render, all pixels; warped time includes one "
