@@ -9,6 +9,7 @@
 
 #include "assets/assets.h"
 #include "command.h"
+#include "volume/importers/import_source.h"
 #include "xr/headless/headless_target.h"
 #include "xr/target_factory.h"
 #include "xr/view_session.h"
@@ -31,20 +32,48 @@ struct Options {
   uint32_t width = 0, height = 0;
 };
 
+// Any importable dataset small enough to upload whole (the ray caster takes one
+// 3D texture); channel 0, timepoint 0.
+Result<DenseVolume> import_whole(const std::string& path) {
+  VXR_ASSIGN_OR_RETURN(std::unique_ptr<SlabSource> src, open_import_source({path}));
+  const VolumeInfo& info = src->info();
+  for (const std::string& w : src->warnings()) std::fprintf(stderr, "vxr view: %s: %s\n", path.c_str(), w.c_str());
+  if (info.dtype != DType::kU8 && info.dtype != DType::kU16)
+    return unsupported(path + ": vxr view shows u8 or u16 data, this is " + dtype_name(info.dtype) +
+                       "; convert it first");
+  constexpr uint64_t kMaxSide = 1024;
+  if (info.dims[0] > kMaxSide || info.dims[1] > kMaxSide || info.dims[2] > kMaxSide)
+    return unsupported(path + ": " + std::to_string(info.dims[0]) + "x" + std::to_string(info.dims[1]) + "x" +
+                       std::to_string(info.dims[2]) + " is over vxr view's whole-volume limit of " +
+                       std::to_string(kMaxSide) + " per side; crop or downsample it first");
+  DenseVolume v;
+  v.dims = {uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])};
+  v.dtype = info.dtype;
+  v.voxel_size = info.voxel_size;
+  v.unit = info.unit;
+  v.data.resize(v.byte_size());
+  Box3 all;
+  all.size = info.dims;
+  VXR_RETURN_IF_ERROR(src->read_region(0, 0, all, v.data));
+  return v;
+}
+
 Result<DenseVolume> load_input(const Options& o) {
   if (o.sample || o.input.empty()) return assets::sample_volume();
   const std::string ext = std::filesystem::path(o.input).extension().string();
-  if (ext == ".json") return load_raw_volume(o.input);
   if (ext == ".vxc")
-    return unsupported(o.input + ": .vxc containers are not readable by `vxr view` yet; pass a raw volume's "
-                                 "JSON sidecar or --sample");
-  return invalid_argument(o.input + ": `vxr view` reads a raw volume's JSON sidecar (.json) or --sample");
+    return unsupported(o.input + ": .vxc containers are not readable by `vxr view` yet; pass a dataset vxr can "
+                                 "import (TIFF, OME-TIFF, Imaris, slice folder, raw + JSON sidecar) or --sample");
+  return import_whole(o.input);
 }
 
 int run(const Options& o) {
   auto volume = load_input(o);
-  if (!volume) return fail(volume.status(), volume.status().code() == ErrorCode::kInvalidArgument ? kExitUsage
-                                                                                                   : kExitFailure);
+  if (!volume) {
+    const ErrorCode c = volume.status().code();  // a wrong path or argument is a usage error
+    return fail(volume.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage
+                                                                                                 : kExitFailure);
+  }
   xr::TargetRequest req;
   req.kind = o.force_xr        ? xr::TargetKind::kOpenXr
              : o.force_desktop ? xr::TargetKind::kDesktop
@@ -91,7 +120,8 @@ int run(const Options& o) {
 void add_view_command(CLI::App& app, Invocation& inv) {
   auto* cmd = app.add_subcommand("view", "explore a volume in a headset (OpenXR), a desktop window, or headless");
   auto o = std::make_shared<Options>();
-  cmd->add_option("input", o->input, "raw volume JSON sidecar (default: the bundled sample)");
+  cmd->add_option("input", o->input,
+                  "dataset to view: anything vxr imports, up to 1024 per side (default: the bundled sample)");
   cmd->add_flag("--sample", o->sample, "view the bundled sample volume (an MRI head)");
   auto* fx = cmd->add_flag("--xr", o->force_xr, "use OpenXR (fail if no runtime or headset)");
   auto* fd = cmd->add_flag("--desktop", o->force_desktop, "use a desktop window");
