@@ -118,3 +118,22 @@ TEST_CASE("script: bad input is refused with a message") {
   CHECK(!parse_script_text("{", s, err));
   CHECK(!parse_script_text(R"({"view": {"width": 0}})", s, err));
 }
+
+TEST_CASE("interaction: thumbstick forward flies along the aim ray (the volume comes closer)") {
+  VolumeTransform t = start();
+  GrabInteraction g;
+  InputState in = hands({0.1, 1.2, -0.3}, 0.0, {0.3, 1.2, -0.3}, 0.0);
+  // Right hand aims along -x (turned 90 degrees left about +y), stick fully forward for 0.1 s.
+  in.hands[kRight].aim.orientation = glm::angleAxis(glm::half_pi<double>(), glm::dvec3(0, 1, 0));
+  in.hands[kRight].thumbstick = {0.0, 1.0};
+  g.update(in, t, 0.1);
+  check_vec(t.position, {0.05, 1.5, -0.5}, 1e-12);  // flew 0.05 m along -x: the volume moved +x
+  // Inside the deadzone nothing moves; while grabbing, the stick is ignored.
+  in.hands[kRight].thumbstick = {0.0, 0.1};
+  g.update(in, t, 0.1);
+  check_vec(t.position, {0.05, 1.5, -0.5}, 1e-12);
+  in.hands[kRight].thumbstick = {0.0, 1.0};
+  in.hands[kLeft].grab = 1.0;
+  g.update(in, t, 0.1);
+  check_vec(t.position, {0.05, 1.5, -0.5}, 1e-12);
+}

@@ -1,10 +1,11 @@
 #include "xr/interaction.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace vxr::xr {
 
-std::array<bool, 2> GrabInteraction::update(const InputState& input, VolumeTransform& t) {
+std::array<bool, 2> GrabInteraction::update(const InputState& input, VolumeTransform& t, double dt) {
   std::array<bool, 2> started{false, false};
   bool changed = false;
   for (int h = 0; h < 2; ++h) {
@@ -34,6 +35,14 @@ std::array<bool, 2> GrabInteraction::update(const InputState& input, VolumeTrans
       t.scale = start_.scale * k;
       t.position = mid + k * (start_.position - start_mid_);
       t.orientation = start_.orientation;
+    }
+  }
+  if (active_count_ == 0 && dt > 0.0) {
+    for (int h = 0; h < 2; ++h) {
+      const HandInput& hand = input.hands[h];
+      if (!hand.tracked || std::abs(hand.thumbstick.y) < s_.deadzone) continue;
+      const glm::dvec3 forward = hand.aim.orientation * glm::dvec3(0, 0, -1);
+      t.position -= forward * (s_.fly_speed * hand.thumbstick.y * dt);
     }
   }
   return started;

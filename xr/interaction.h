@@ -1,6 +1,8 @@
 // Device-independent volume manipulation (the paper's transformation tool):
 // one hand grabs and moves/rotates the volume rigidly; two hands pinch to
-// scale it about their midpoint (and carry it with the midpoint).
+// scale it about their midpoint (and carry it with the midpoint). A
+// thumbstick pushed forward on a hand that is not grabbing flies the user
+// along that hand's aim ray (the volume moves the other way).
 //
 // Works on any InputState, whichever target or controller produced it. Each
 // time the set of grabbing hands changes, the gesture re-anchors on the
@@ -18,15 +20,18 @@ struct GrabSettings {
   double press = 0.6;    // grab value that starts a grab
   double release = 0.4;  // ... and that ends it (hysteresis)
   double min_scale = 1e-9, max_scale = 1e9;  // metres per volume unit
+  double fly_speed = 0.5;                    // metres per second at full thumbstick
+  double deadzone = 0.2;
 };
 
 class GrabInteraction {
  public:
   explicit GrabInteraction(GrabSettings s = {}) : s_(s) {}
 
-  // Updates `t` from this frame's input. Returns the hands whose grab started
-  // this frame (for a haptic click).
-  std::array<bool, 2> update(const InputState& input, VolumeTransform& t);
+  // Updates `t` from this frame's input; `dt` (seconds since the last frame)
+  // scales thumbstick flight. Returns the hands whose grab started this frame
+  // (for a haptic click).
+  std::array<bool, 2> update(const InputState& input, VolumeTransform& t, double dt = 0.0);
 
   bool grabbing(Hand h) const { return held_[h]; }
 

@@ -30,6 +30,7 @@ Result<Outcome> run_once(FrameTarget& target, const DenseVolume& volume, const V
   stats.target = target.describe();
 
   bool exit_requested = false;
+  int64_t last_display_ns = 0;
   double total_ms = 0.0;
   uint64_t timed = 0;
   for (;;) {
@@ -42,7 +43,12 @@ Result<Outcome> run_once(FrameTarget& target, const DenseVolume& volume, const V
     }
     const auto t0 = std::chrono::steady_clock::now();
 
-    const auto started = grab.update(frame->input, stats.transform);
+    // Seconds since the last frame's display time, for thumbstick flight (capped: a stall is not a jump).
+    const double dt = last_display_ns > 0 && frame->display_time_ns > last_display_ns
+                          ? std::min(0.1, double(frame->display_time_ns - last_display_ns) * 1e-9)
+                          : 0.0;
+    last_display_ns = frame->display_time_ns;
+    const auto started = grab.update(frame->input, stats.transform, dt);
     for (int h = 0; h < 2; ++h)
       if (started[h]) target.haptic_pulse(Hand(h), 0.5, 0.02);
 
