@@ -124,16 +124,43 @@ TEST_CASE("openxr: scripted grab-move and two-hand pinch through the runtime mov
   CHECK(test::core_validation_messages(dir).empty());
 }
 
-TEST_CASE("openxr: without a STAGE space the session uses LOCAL") {
+TEST_CASE("openxr: every suggested controller profile delivers grab, grip pose and haptics") {
+  test::GpuTestScope scope;
+  const DenseVolume v = sample();
+  const VolumeTransform t0 = default_volume_transform({v.dims, v.voxel_size});
+  for (const char* profile : {"khr/simple_controller", "oculus/touch_controller", "htc/vive_controller",
+                              "valve/index_controller", "microsoft/motion_controller"}) {
+    INFO(std::string(profile));
+    const std::string dir = test::xr_out_dir(std::string("profile_") + (std::strchr(profile, '/') + 1));
+    test::use_test_runtime(dir, std::string(R"({"view": {"width": 16, "height": 16},
+      "profile": "/interaction_profiles/)") + profile + R"(",
+      "keys": [{"frame": 0, "right": {"grip": {"position": [0.1, 1.4, -0.4]}, "squeeze": 0}},
+               {"frame": 3, "right": {"squeeze": 1}},
+               {"frame": 8, "right": {"grip": {"position": [0.2, 1.4, -0.4]}}}]})");
+    auto stats = run(v, 10);
+    REQUIRE_MESSAGE(stats.is_ok(), stats.status().to_string());
+    CHECK(stats->transform.position.x == doctest::Approx(t0.position.x + 0.1).epsilon(1e-5));
+    CHECK(stats->target.find(std::string("controllers /interaction_profiles/") + profile) != std::string::npos);
+    const nlohmann::json report = test::runtime_report(dir);
+    REQUIRE(report.size() == 1);
+    CHECK(report[0]["haptic_pulses"] == 1);
+    CHECK(test::core_validation_messages(dir).empty());
+  }
+}
+
+TEST_CASE("openxr: without a STAGE space the session uses LOCAL, without the depth extension no depth layers") {
   test::GpuTestScope scope;
   const std::string dir = test::xr_out_dir("local");
-  test::use_test_runtime(dir, R"({"view": {"width": 32, "height": 32}, "no_stage": true})");
+  test::use_test_runtime(dir, R"({"view": {"width": 32, "height": 32}, "no_stage": true, "no_depth": true})");
   auto stats = run(sample(), 3);
   REQUIRE_MESSAGE(stats.is_ok(), stats.status().to_string());
   CHECK(stats->target.find("LOCAL space") != std::string::npos);
+  CHECK(stats->target.find("no depth layers") != std::string::npos);
   const nlohmann::json report = test::runtime_report(dir);
   REQUIRE(report.size() == 1);
   CHECK(report[0]["layer_space"] == "LOCAL");
+  CHECK(report[0]["frames_with_layers"] == 3);
+  CHECK(report[0]["frames_with_depth"] == 0);
   CHECK(test::core_validation_messages(dir).empty());
 }
 

@@ -149,9 +149,17 @@ Config load_config() {
   return c;
 }
 
+Config g_config;
+bool g_config_loaded = false;
+
+// Re-read while no instance exists: the loader may keep this library loaded
+// between instances, and a new instance must see the current environment.
 Config& config() {
-  static Config c = load_config();
-  return c;
+  if (!g_config_loaded) {
+    g_config = load_config();
+    g_config_loaded = true;
+  }
+  return g_config;
 }
 
 // Process-wide counter in an environment variable (survives the loader
@@ -163,7 +171,11 @@ long bump_env(const std::string& key) {
   return n;
 }
 
+struct Instance;
+extern Instance* g_instance;
+
 XrResult enter(const char* fn) {
+  if (!g_instance) g_config_loaded = false;
   Config& c = config();
   if (!c.call_log.empty()) {
     static std::set<std::string> logged;
@@ -261,7 +273,7 @@ struct Session {
   std::string layer_space;
 };
 
-Instance* g_instance = nullptr;
+Instance* g_instance = nullptr;  // one instance at a time
 
 Instance* as_instance(XrInstance h) {
   return reinterpret_cast<Instance*>(h) == g_instance && g_instance ? g_instance : nullptr;
