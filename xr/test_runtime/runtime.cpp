@@ -1426,7 +1426,7 @@ XrResult xrGetInstanceProcAddr(XrInstance instance, const char* name, PFN_xrVoid
   const bool global = n == "xrEnumerateInstanceExtensionProperties" || n == "xrEnumerateApiLayerProperties" ||
                       n == "xrCreateInstance";
   if (instance == XR_NULL_HANDLE && !global) return XR_ERROR_HANDLE_INVALID;
-  if (n == "xrGetVulkanGraphicsRequirementsKHR") n.size();  // legacy enable path: not offered (lavapipe lacks it)
+  // The legacy XR_KHR_vulkan_enable path is not offered: lavapipe lacks the external fd extensions it needs.
   for (const Entry& e : kEntries)
     if (n == e.name) {
       *function = e.fn;
