@@ -2,6 +2,7 @@
 // SOURCES.md there) and against broken copies of them made in a temp folder.
 #include <doctest/doctest.h>
 #include <hdf5.h>
+#include <tiffio.h>
 
 #include <cmath>
 #include <cstdio>
@@ -17,6 +18,7 @@
 #include "volume/importers/imagej_metadata.h"
 #include "volume/importers/import_source.h"
 #include "volume/importers/slice_series_importer.h"
+#include "volume/importers/tiff_reader.h"
 #include "volume/importers/units.h"
 
 // jpeglib.h needs FILE and size_t declared first.
@@ -794,4 +796,86 @@ TEST_CASE("importers: ImageJ stacks over 4 GB (one IFD, planes stored contiguous
   const std::string e = error_of({(dir / "short.tif").string()});
   CHECK_MESSAGE(e.find((dir / "short.tif").string() + ": ImageJ metadata says 6 images") == 0, e);
   CHECK(e.find("truncated") != std::string::npos);
+}
+
+namespace {
+
+// A 3-page 1024x1024 u16 TIFF made with libtiff: tiled 64x64 or strips of 16 rows, with `compression`.
+void write_big_tiff_stack(const fs::path& p, bool tiled, uint16_t compression) {
+  TIFF* t = TIFFOpen(p.c_str(), "w");
+  REQUIRE(t);
+  std::vector<uint16_t> buf(64 * 64);
+  for (uint32_t z = 0; z < 3; ++z) {
+    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, 1024u);
+    TIFFSetField(t, TIFFTAG_IMAGELENGTH, 1024u);
+    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, uint16_t(16));
+    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, uint16_t(1));
+    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+    TIFFSetField(t, TIFFTAG_COMPRESSION, compression);
+    auto value = [z](uint32_t x, uint32_t y) { return uint16_t(z * 7 + x * 3 + y * 5); };
+    if (tiled) {
+      TIFFSetField(t, TIFFTAG_TILEWIDTH, 64u);
+      TIFFSetField(t, TIFFTAG_TILELENGTH, 64u);
+      for (uint32_t ty = 0; ty < 1024; ty += 64)
+        for (uint32_t tx = 0; tx < 1024; tx += 64) {
+          for (uint32_t y = 0; y < 64; ++y)
+            for (uint32_t x = 0; x < 64; ++x) buf[y * 64 + x] = value(tx + x, ty + y);
+          REQUIRE(TIFFWriteTile(t, buf.data(), tx, ty, 0, 0) > 0);
+        }
+    } else {
+      TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, 16u);
+      std::vector<uint16_t> row(1024);
+      for (uint32_t y = 0; y < 1024; ++y) {
+        for (uint32_t x = 0; x < 1024; ++x) row[x] = value(x, y);
+        REQUIRE(TIFFWriteScanline(t, row.data(), y, 0) >= 0);
+      }
+    }
+    REQUIRE(TIFFWriteDirectory(t));
+  }
+  TIFFClose(t);
+}
+
+}  // namespace
+
+TEST_CASE("importers: a small box decodes only the strips/tiles under it, never the whole stack") {
+  const fs::path dir = scratch("box_cost");
+  struct Case {
+    const char* name;
+    bool tiled;
+    uint16_t compression;
+  };
+  for (const Case& c : {Case{"tiled_deflate.tif", true, COMPRESSION_ADOBE_DEFLATE},
+                        Case{"strips_lzw.tif", false, COMPRESSION_LZW}, Case{"strips_raw.tif", false, COMPRESSION_NONE},
+                        Case{"tiled_raw.tif", true, COMPRESSION_NONE}}) {
+    CAPTURE(c.name);
+    write_big_tiff_stack(dir / c.name, c.tiled, c.compression);
+    auto s = open_ok((dir / c.name).string());
+    REQUIRE(s->info().dims == std::array<uint64_t, 3>{1024, 1024, 3});
+    Box3 b;
+    b.origin = {500, 500, 1};
+    b.size = {10, 10, 1};  // inside tile (7, 7) / strip 31
+    auto& counters = tiff::read_counters();
+    const uint64_t blocks0 = counters.blocks_decoded, raw0 = counters.raw_bytes;
+    const auto v = read_box(*s, 0, 0, b);
+    const uint64_t blocks = counters.blocks_decoded - blocks0, raw = counters.raw_bytes - raw0;
+    if (c.compression == COMPRESSION_NONE) {
+      CHECK(blocks == 0);
+      CHECK(raw == 10 * (c.tiled ? 64 : 1024) * 2);  // only the 10 rows asked for
+    } else {
+      CHECK(blocks == 1);
+      CHECK(raw == 0);
+    }
+    uint16_t px;
+    std::memcpy(&px, &v[2 * (3 * 10 + 4)], 2);
+    CHECK(px == uint16_t(7 + 504 * 3 + 503 * 5));
+  }
+}
+
+TEST_CASE("importers: a multi-file OME-TIFF with a missing part names the missing file") {
+  const fs::path dir = scratch("ome_missing");
+  for (const auto& f : fs::directory_iterator(kData + "/ome-tiff/multifile-master"))
+    if (f.path().filename() != "multifile-Z4.ome.tiff") fs::copy_file(f.path(), dir / f.path().filename());
+  const std::string e = error_of({(dir / "multifile-Z2.ome.tiff").string()});
+  CHECK_MESSAGE(e.find((dir / "multifile-Z4.ome.tiff").string() + ": missing") == 0, e);
+  CHECK(e.find("multifile-Z1.ome.tiff") != std::string::npos);  // the file whose XML names it
 }

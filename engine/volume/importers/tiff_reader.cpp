@@ -140,6 +140,11 @@ std::optional<std::pair<uint64_t, uint64_t>> raw_first_page_size(const std::stri
 
 }  // namespace
 
+ReadCounters& read_counters() {
+  static ReadCounters c;
+  return c;
+}
+
 bool has_tiff_magic(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   unsigned char h[4] = {0, 0, 0, 0};
@@ -376,6 +381,7 @@ Status TiffFile::decode_block(const PageInfo& page, uint32_t block, std::vector<
     return corrupt(path_ + ": cannot decode " + (page.tiled ? "tile " : "strip ") + std::to_string(block) + " (" +
                    (why.empty() ? "damaged data" : why) + ")");
   }
+  read_counters().blocks_decoded.fetch_add(1, std::memory_order_relaxed);
   // A short last strip or a damaged block: zero what was not decoded.
   if (uint64_t(got) < size) std::fill(out.begin() + got, out.end(), 0);
   return Status::ok();
@@ -412,6 +418,7 @@ Status TiffFile::read_rows_raw(const PageInfo& page, uint64_t off, uint64_t len,
     if (r <= 0) return corrupt(path_ + ": image data runs past the end of the file; the file is truncated");
     done += uint64_t(r);
   }
+  read_counters().raw_bytes.fetch_add(avail, std::memory_order_relaxed);
   if (TIFFIsByteSwapped(tif_)) {
     if (page.bps == 16) TIFFSwabArrayOfShort(reinterpret_cast<uint16_t*>(out.data()), tmsize_t(n / 2));
     if (page.bps == 32) TIFFSwabArrayOfLong(reinterpret_cast<uint32_t*>(out.data()), tmsize_t(n / 4));

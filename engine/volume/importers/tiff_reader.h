@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -19,6 +20,13 @@
 typedef struct tiff TIFF;
 
 namespace vxr::tiff {
+
+// Process-wide counters, so tests and benchmarks can see how much a read touched.
+struct ReadCounters {
+  std::atomic<uint64_t> blocks_decoded{0};  // compressed strips/tiles decoded
+  std::atomic<uint64_t> raw_bytes{0};       // uncompressed bytes read straight from files
+};
+ReadCounters& read_counters();
 
 // True when the first bytes of `path` are a TIFF or BigTIFF header.
 bool has_tiff_magic(const std::string& path);
