@@ -87,6 +87,24 @@ TEST_CASE("brick render: empty-space skipping takes far fewer samples and gives 
   CHECK(off.samples >= 3 * on.samples);
 }
 
+TEST_CASE("brick render: single pass and multipass waves give the same image") {
+  test::GpuTestScope scope;
+  auto src = make(128);
+  auto r = renderer(*src);
+  const Camera cam = orbit_camera(r->placement(), 200, -20, 0.9, 50);
+  BrickFrameSettings f;
+  f.lod.lod_bias = -0.5;
+  BrickFrameStats ms, ss;
+  const ImageRgba8 multi = converge(*r, cam, vessels(), f, 96, 96, &ms);
+  f.mode = BrickPassMode::kSinglePass;
+  const ImageRgba8 single = converge(*r, cam, vessels(), f, 96, 96, &ss);
+  CHECK(test::looks_non_blank(multi));
+  CHECK(multi.pixels == single.pixels);
+  CHECK(ms.samples == ss.samples);
+  CHECK(ss.dispatches == 1);
+  CHECK(ms.dispatches > 2);
+}
+
 TEST_CASE("brick render: paged through the pool equals the single-texture path within 1/255") {
   test::GpuTestScope scope;
   auto src = make(128);

@@ -10,6 +10,7 @@ void add_bench_command(CLI::App& app, Invocation& inv) {
   bench->require_subcommand(1);
   bench::add_roofline_bench(*bench, inv);
   bench::add_xr_bench(*bench, inv);
+  bench::add_lod_bench(*bench, inv);
 }
 
 }  // namespace vxr::cli

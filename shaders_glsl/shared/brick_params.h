@@ -15,6 +15,7 @@ using uvec4 = glm::uvec4;
 #define VXR_BRICK_LOAD_ACCUM 1u   // continue the rays from the accumulation image
 #define VXR_BRICK_STORE_ACCUM 2u  // write the rays' state to the accumulation image
 #define VXR_BRICK_STORE_FINAL 4u  // write the finished premultiplied RGBA8 pixel
+#define VXR_BRICK_WORK_ITEMS 8u   // workgroup i marches work item pass.x + i: (brick, tile x, tile y)
 
 // One brick to march, everything in its own local voxels (level-l voxels,
 // origin at the brick's interior corner): the CPU computes these in double,
@@ -34,7 +35,7 @@ struct BrickCastParams {
   vec4 up;         // xyz: +y of the image at unit distance
   vec4 shading;    // x: step (local voxels), y/z: window lo/hi (0..1 texel units), w: extinction per level-0 voxel
   uvec4 control;   // x: image width, y: image height, z: first brick, w: brick count
-  uvec4 pass;      // xy: pixel offset of this dispatch, z: flags, w: optical model (raycast_params.h)
+  uvec4 pass;      // xy: pixel offset of this dispatch (work-item base in x with VXR_BRICK_WORK_ITEMS), z: flags, w: optical model
   vec4 atlas_inv;  // xyz: 1 / atlas size in texels
 };
 

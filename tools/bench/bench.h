@@ -38,5 +38,6 @@ Result<std::string> write_report(const BenchOptions& options, const std::string&
 // One registration per benchmark, called from tools/cmd_bench.cpp.
 void add_roofline_bench(CLI::App& bench, cli::Invocation& inv);
 void add_xr_bench(CLI::App& bench, cli::Invocation& inv);
+void add_lod_bench(CLI::App& bench, cli::Invocation& inv);
 
 }  // namespace vxr::bench

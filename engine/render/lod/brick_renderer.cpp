@@ -22,6 +22,7 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
   };
 }
 
@@ -83,10 +84,14 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
                                                            gpu::MemoryIntent::kUpload, "brick table"}));
   VXR_ASSIGN_OR_RETURN(r->counters_, gpu::create_buffer(ctx, {16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                               gpu::MemoryIntent::kReadback, "brick counters"}));
+  VXR_ASSIGN_OR_RETURN(r->items_, gpu::create_buffer(ctx, {uint64_t(options.max_work_items) * sizeof(glm::uvec4),
+                                                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                           gpu::MemoryIntent::kUpload, "brick work items"}));
   gpu::write_combined_image(ctx, r->paged_set_, 0, r->pool_->atlas().view, r->linear_);
   for (VkDescriptorSet set : {r->paged_set_, r->mono_set_}) {
     gpu::write_storage_buffer(ctx, set, 4, r->table_.buffer);
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
+    gpu::write_storage_buffer(ctx, set, 6, r->items_.buffer);
   }
   VXR_RETURN_IF_ERROR(r->pool_->pin_top_level());
   return r;
@@ -164,7 +169,7 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
 
 Result<double> BrickRenderer::cast(VkDescriptorSet set, const LodView& view, const RaycastSettings& s,
                                    uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
-                                   const std::vector<glm::uvec4>& rects, BrickFrameStats* stats) {
+                                   const std::vector<glm::uvec2>& waves, BrickFrameStats* stats) {
   shader::BrickCastParams p{};
   p.forward = v4(view.forward);
   p.right = v4(view.right);
@@ -182,25 +187,31 @@ Result<double> BrickRenderer::cast(VkDescriptorSet set, const LodView& view, con
                           VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.pipeline);
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout, 0, 1, &set, 0, nullptr);
-    auto dispatch = [&](uint32_t first, uint32_t count, glm::uvec4 rect, uint32_t flags) {
+    auto dispatch = [&](uint32_t first, uint32_t count, uint32_t flags) {
       p.control = glm::uvec4(w, h, first, count);
-      p.pass = glm::uvec4(rect.x, rect.y, flags, model);
+      p.pass = glm::uvec4(0, 0, flags, model);
       vkCmdPushConstants(cmd, pipeline_.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
-      vkCmdDispatch(cmd, (rect.z + 7) / 8, (rect.w + 7) / 8, 1);
+      vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
       ++dispatches;
     };
-    const glm::uvec4 full(0, 0, w, h);
     if (mode == BrickPassMode::kSinglePass) {
-      dispatch(0, bricks, full, VXR_BRICK_STORE_FINAL);
+      dispatch(0, bricks, VXR_BRICK_STORE_FINAL);
     } else {
-      dispatch(0, 0, full, VXR_BRICK_STORE_ACCUM);  // clear
-      for (uint32_t b = 0; b < bricks; ++b) {
-        if (rects[b].z == 0 || rects[b].w == 0) continue;
-        compute_barrier(cmd);
-        dispatch(b, 1, rects[b], VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM);
+      dispatch(0, 0, VXR_BRICK_STORE_ACCUM);  // clear
+      const uint32_t max_groups = ctx_.limits().maxComputeWorkGroupCount[0];
+      for (const glm::uvec2& wave : waves) {
+        compute_barrier(cmd);  // a wave continues rays the previous one wrote
+        for (uint32_t done = 0; done < wave.y; done += max_groups) {
+          p.control = glm::uvec4(w, h, 0, 0);
+          p.pass = glm::uvec4(wave.x + done, 0, VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM,
+                              model);
+          vkCmdPushConstants(cmd, pipeline_.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+          vkCmdDispatch(cmd, std::min(max_groups, wave.y - done), 1, 1);
+          ++dispatches;
+        }
       }
       compute_barrier(cmd);
-      dispatch(0, 0, full, VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_FINAL);
+      dispatch(0, 0, VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_FINAL);
     }
   }));
   const double ms = ms_since(t0);
@@ -236,6 +247,46 @@ glm::uvec4 screen_rect(const BrickBox& b, const LodView& v) {
 }
 }  // namespace
 
+Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<ChunkKey>& draw, const LodView& view) {
+  // Each brick becomes one work item per 8x8 tile its screen rectangle
+  // touches. A brick goes into the wave after the last wave that touched any
+  // of its tiles, so within a wave no two items share a pixel (no races) and
+  // every pixel still sees its bricks front to back across waves.
+  const uint32_t tw = (view.width + 7) / 8, th = (view.height + 7) / 8;
+  std::vector<uint32_t> tile_wave(size_t(tw) * th, 0);
+  struct Item {
+    uint32_t wave, brick, tx, ty;
+  };
+  std::vector<Item> items;
+  uint32_t waves = 0;
+  for (uint32_t b = 0; b < draw.size(); ++b) {
+    const glm::uvec4 r = screen_rect(chunk_box(src_, draw[b]), view);
+    if (r.z == 0 || r.w == 0) continue;
+    const uint32_t x0 = r.x / 8, y0 = r.y / 8, x1 = (r.x + r.z - 1) / 8, y1 = (r.y + r.w - 1) / 8;
+    uint32_t wave = 0;
+    for (uint32_t y = y0; y <= y1; ++y)
+      for (uint32_t x = x0; x <= x1; ++x) wave = std::max(wave, tile_wave[size_t(y) * tw + x]);
+    for (uint32_t y = y0; y <= y1; ++y)
+      for (uint32_t x = x0; x <= x1; ++x) {
+        tile_wave[size_t(y) * tw + x] = wave + 1;
+        items.push_back({wave, b, x * 8, y * 8});
+      }
+    waves = std::max(waves, wave + 1);
+  }
+  if (items.size() > opt_.max_work_items)
+    return out_of_range("render: the view needs " + std::to_string(items.size()) + " brick tiles, the work list holds " +
+                        std::to_string(opt_.max_work_items) + "; raise the LOD bias or use a smaller image");
+  std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.wave < b.wave; });
+  std::vector<glm::uvec2> out(waves, glm::uvec2(0));
+  auto* dst = static_cast<glm::uvec4*>(items_.mapped);
+  for (uint32_t i = 0; i < items.size(); ++i) {
+    dst[i] = glm::uvec4(items[i].brick, items[i].tx, items[i].ty, 0);
+    if (out[items[i].wave].y == 0) out[items[i].wave].x = i;
+    ++out[items[i].wave].y;
+  }
+  return out;
+}
+
 Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RaycastSettings& s,
                                          const BrickFrameSettings& frame, uint32_t width, uint32_t height,
                                          BrickFrameStats* stats_out) {
@@ -261,18 +312,20 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RaycastSett
     return out_of_range("render: the view needs " + std::to_string(lod.draw.size()) + " bricks, the brick table holds " +
                         std::to_string(opt_.max_bricks) + "; raise the LOD bias or max_bricks");
 
-  std::vector<glm::uvec4> rects;
   for (size_t i = 0; i < lod.draw.size(); ++i) {
     const glm::uvec3 o = pool_->touch(lod.draw[i]);
     fill_record(static_cast<uint8_t*>(table_.mapped) + i * sizeof(shader::BrickRecord), lod.draw[i], glm::vec3(o),
                 view, frame.lod);
-    if (frame.mode == BrickPassMode::kMultipass) rects.push_back(screen_rect(chunk_box(src_, lod.draw[i]), view));
+  }
+  std::vector<glm::uvec2> waves;
+  if (frame.mode == BrickPassMode::kMultipass) {
+    VXR_ASSIGN_OR_RETURN(waves, build_waves(lod.draw, view));
   }
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;
   st.hit_rate = wanted ? double(lod.stats.drawn - lod.stats.fallback) / double(wanted) : 1.0;
 
   VXR_RETURN_IF_ERROR(cast(paged_set_, view, s, static_cast<uint32_t>(lod.draw.size()), pool_->atlas_texels(),
-                           frame.mode, rects, &st)
+                           frame.mode, waves, &st)
                           .status());
   // Uploads after the frame's rays: what arrives is drawn from the next frame on.
   if (!lod.requests.empty()) {

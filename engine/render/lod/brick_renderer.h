@@ -5,12 +5,16 @@
 // brick table (brick-local eye, scale, clip box, cut plane, atlas origin),
 // upload missing bricks within the frame's byte budget, march, read back.
 //
-// Pass modes. kSinglePass: one dispatch; each ray loops over the brick table
-// with a slab test per brick. kMultipass (the paper's): one dispatch per
-// brick over its screen rectangle, continuing the rays from an RGBA32F
-// accumulation image. Measured on lavapipe (`vxr bench lod`, see
-// docs/ARCHITECTURE.md) single pass is the default: a dispatch plus barrier
-// per brick costs more than the rays' slab tests save.
+// Pass modes. kSinglePass: one dispatch; each ray loops over the whole brick
+// table with a slab test per brick. kMultipass (the paper's, batched): each
+// brick becomes work items, one per 8x8 pixel tile its screen rectangle
+// touches; items go into waves so that no two items of a wave share a tile,
+// and one dispatch per wave continues the rays from an RGBA32F accumulation
+// image. Measured with `vxr bench lod` (docs/ARCHITECTURE.md): on lavapipe the
+// single pass is ~10x slower (every ray pays for every brick), and one
+// dispatch per brick (the paper's literal multipass) pays a dispatch and a
+// barrier per brick; waves need about as many dispatches as bricks overlap
+// along a ray. kMultipass is the default.
 //
 // render_monolithic() is the comparison path: one level of the source as a
 // single 3D texture, drawn by the same shader as one brick.
@@ -34,13 +38,14 @@ enum class BrickPassMode { kSinglePass, kMultipass };
 
 struct BrickRendererOptions {
   BrickPoolOptions pool;
-  uint32_t max_bricks = 16384;  // brick-table capacity per frame
+  uint32_t max_bricks = 16384;         // brick-table capacity per frame
+  uint32_t max_work_items = 1u << 20;  // multipass (brick, tile) items per frame
 };
 
 struct BrickFrameSettings {
   LodSettings lod;
   uint64_t upload_budget_bytes = UINT64_MAX;  // per frame; at least one brick is uploaded
-  BrickPassMode mode = BrickPassMode::kSinglePass;
+  BrickPassMode mode = BrickPassMode::kMultipass;
 };
 
 struct BrickFrameStats {
@@ -85,8 +90,10 @@ class BrickRenderer {
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
                    const LodSettings& clip) const;
   Result<double> cast(VkDescriptorSet set, const LodView& view, const RaycastSettings& s, uint32_t bricks,
-                      const glm::uvec3& atlas_texels, BrickPassMode mode, const std::vector<glm::uvec4>& rects,
+                      const glm::uvec3& atlas_texels, BrickPassMode mode, const std::vector<glm::uvec2>& waves,
                       BrickFrameStats* stats);
+  // Multipass work items (brick, 8x8 tile) grouped into waves; returns (first item, count) per wave.
+  Result<std::vector<glm::uvec2>> build_waves(const std::vector<ChunkKey>& draw, const LodView& view);
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
   gpu::Context& ctx_;
@@ -98,7 +105,7 @@ class BrickRenderer {
   VkDescriptorSet paged_set_ = VK_NULL_HANDLE, mono_set_ = VK_NULL_HANDLE;
   gpu::Handle<VkSampler> linear_;
   gpu::Image transfer_tex_, target_, accum_, mono_tex_;
-  gpu::Buffer table_, counters_;
+  gpu::Buffer table_, counters_, items_;
   std::string tf_key_;
   uint32_t mono_level_ = UINT32_MAX;
   double value_scale_ = 255.0;

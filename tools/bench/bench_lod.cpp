@@ -1,0 +1,231 @@
+// `vxr bench lod`: the out-of-core renderer's scale, skip and paging figures.
+//
+// scale: the procedural vessels at 256^3, 4096^3 and 65536^3 from the same
+//   relative viewpoint (same screen coverage), converged, LOD by angular
+//   resolution: frame time and samples should stay about constant.
+// skip: a ~10% occupied 256^3 volume at full resolution, empty-space skipping
+//   on vs off: speedup, sample ratio, identical images.
+// paged_vs_monolithic: the same 256^3 at full resolution through the brick
+//   pool vs one 3D texture, same shader: time ratio and max abs difference.
+// passes: single pass over the brick table vs the paper's multipass (one
+//   dispatch per brick over its screen rectangle) on the same frames.
+// throttled: frames to converge with 4 bricks uploaded per frame.
+// Times are whole frames (traversal, brick table, ray cast, readback), median
+// of --repeats after convergence.
+#include <chrono>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "bench.h"
+#include "render/lod/brick_renderer.h"
+#include "volume/procedural_source.h"
+
+namespace vxr::bench {
+using cli::fail;
+using cli::kExitOk;
+using cli::open_gpu;
+namespace {
+
+struct Options {
+  BenchOptions common;
+  uint32_t size = 256;
+  uint64_t largest = 65536;
+};
+
+struct Case {
+  double ms = 0;
+  BrickFrameStats stats;
+  ImageRgba8 image;
+};
+
+RaycastSettings vessel_settings() {
+  RaycastSettings s;
+  s.colormap = "hot";
+  s.window_lo = 8;  // above the background noise (0..6)
+  s.window_hi = 200;
+  s.step_voxels = 0.5;
+  s.density = 0.3;
+  return s;
+}
+
+Result<std::unique_ptr<ProceduralSource>> source(uint64_t side) {
+  ProceduralOptions o;
+  o.dims = {side, side, side};
+  o.noise_max = 6;
+  o.occupancy = 0.10;
+  return ProceduralSource::create(o);
+}
+
+// Converges (uploads until nothing is missing), then times `repeats` frames.
+Result<Case> measure(BrickRenderer& r, const Camera& cam, const BrickFrameSettings& f, uint32_t size, int repeats) {
+  Case c;
+  for (int i = 0;; ++i) {
+    auto img = r.render(cam, vessel_settings(), f, size, size, &c.stats);
+    if (!img) return img.status();
+    if (c.stats.lod.missing == 0) break;
+    if (i > 200) return internal_error("bench lod: the view did not converge in 200 frames");
+  }
+  Status err;
+  c.ms = median_ms(
+      repeats,
+      [&] {
+        auto img = r.render(cam, vessel_settings(), f, size, size, &c.stats);
+        if (!img) return img.status();
+        c.image = std::move(*img);
+        return Status::ok();
+      },
+      &err);
+  if (!err.is_ok()) return err;
+  return c;
+}
+
+nlohmann::json stats_json(const BrickFrameStats& s) {
+  return {{"visited", s.lod.visited},   {"drawn", s.lod.drawn},     {"fallback", s.lod.fallback},
+          {"skipped_empty", s.lod.skipped_empty}, {"culled", s.lod.culled}, {"missing", s.lod.missing},
+          {"samples", s.samples},       {"bytes_uploaded", s.bytes_uploaded}, {"hit_rate", s.hit_rate},
+          {"traverse_ms", s.traverse_ms}, {"render_ms", s.render_ms}, {"dispatches", s.dispatches}};
+}
+
+int max_abs_diff(const ImageRgba8& a, const ImageRgba8& b) {
+  int m = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) m = std::max(m, std::abs(int(a.pixels[i]) - int(b.pixels[i])));
+  return m;
+}
+
+int run(const Options& o) {
+  auto gpu = open_gpu();
+  if (!gpu) return fail(gpu.status());
+  BrickRendererOptions ro;
+  ro.pool.slots = {16, 16, 8};
+  nlohmann::json doc;
+  doc["image_size"] = {o.size, o.size};
+  doc["repeats"] = o.common.repeats;
+
+  // --- scale
+  {
+    nlohmann::json sizes = nlohmann::json::array(), ms = nlohmann::json::array(), samples = nlohmann::json::array(),
+                   frames = nlohmann::json::array();
+    for (uint64_t side : {uint64_t(256), uint64_t(4096), o.largest}) {
+      auto src = source(side);
+      if (!src) return fail(src.status());
+      auto r = BrickRenderer::create(**gpu, **src, ro);
+      if (!r) return fail(r.status());
+      const Camera cam = orbit_camera((*r)->placement(), 30, 25, 1.6);
+      auto c = measure(**r, cam, {}, o.size, o.common.repeats);
+      if (!c) return fail(c.status());
+      sizes.push_back(side);
+      ms.push_back(c->ms);
+      samples.push_back(c->stats.samples);
+      frames.push_back(stats_json(c->stats));
+      std::printf("scale %llu^3: %.2f ms  %s\n", (unsigned long long)side, c->ms, format_stats(c->stats).c_str());
+    }
+    doc["scale"] = {{"sizes", sizes},
+                    {"ms", ms},
+                    {"samples", samples},
+                    {"frames", frames},
+                    {"ratio_largest_to_smallest",
+                     {{"ms", ms.back().get<double>() / ms.front().get<double>()},
+                      {"samples", samples.back().get<double>() / samples.front().get<double>()}}}};
+  }
+
+  auto src = source(256);
+  if (!src) return fail(src.status());
+  auto r = BrickRenderer::create(**gpu, **src, ro);
+  if (!r) return fail(r.status());
+  const Camera cam = orbit_camera((*r)->placement(), 30, 25, 1.25);
+  BrickFrameSettings full;
+  full.lod.force_level = 0;
+
+  // --- skip
+  {
+    BrickFrameSettings off = full;
+    off.lod.skip_empty = false;
+    auto on_c = measure(**r, cam, full, o.size, o.common.repeats);
+    auto off_c = measure(**r, cam, off, o.size, o.common.repeats);
+    if (!on_c) return fail(on_c.status());
+    if (!off_c) return fail(off_c.status());
+    doc["skip"] = {{"speedup", off_c->ms / on_c->ms},
+                   {"sample_ratio", double(off_c->stats.samples) / double(on_c->stats.samples)},
+                   {"identical", on_c->image.pixels == off_c->image.pixels},
+                   {"occupancy", (*src)->measured_occupancy()},
+                   {"on", stats_json(on_c->stats)},
+                   {"off", stats_json(off_c->stats)},
+                   {"ms_on", on_c->ms},
+                   {"ms_off", off_c->ms}};
+    std::printf("skip on : %.2f ms  %s\nskip off: %.2f ms  %s\n", on_c->ms, format_stats(on_c->stats).c_str(),
+                off_c->ms, format_stats(off_c->stats).c_str());
+
+    // --- paged vs monolithic (skipping off on both: the same work)
+    if (Status s = (*r)->set_monolithic(0); !s) return fail(s);
+    Status err;
+    ImageRgba8 mono;
+    BrickFrameStats ms;
+    const double mono_ms = median_ms(
+        o.common.repeats,
+        [&] {
+          auto img = (*r)->render_monolithic(cam, vessel_settings(), off.lod, o.size, o.size, &ms);
+          if (!img) return img.status();
+          mono = std::move(*img);
+          return Status::ok();
+        },
+        &err);
+    if (!err.is_ok()) return fail(err);
+    doc["paged_vs_monolithic"] = {{"time_ratio", off_c->ms / mono_ms},
+                                  {"max_abs", max_abs_diff(off_c->image, mono)},
+                                  {"paged_ms", off_c->ms},
+                                  {"monolithic_ms", mono_ms},
+                                  {"paged_samples", off_c->stats.samples},
+                                  {"monolithic_samples", ms.samples}};
+    std::printf("monolithic: %.2f ms, samples %llu, max_abs %d\n", mono_ms, (unsigned long long)ms.samples,
+                max_abs_diff(off_c->image, mono));
+
+    // --- the paper's multipass (the default) vs a single pass over the brick table, skip on
+    BrickFrameSettings single = full;
+    single.mode = BrickPassMode::kSinglePass;
+    auto single_c = measure(**r, cam, single, o.size, o.common.repeats);
+    if (!single_c) return fail(single_c.status());
+    doc["passes"] = {{"single_ms", single_c->ms},
+                     {"multi_ms", on_c->ms},
+                     {"bricks", on_c->stats.lod.drawn},
+                     {"multi_dispatches", on_c->stats.dispatches},
+                     {"max_abs", max_abs_diff(on_c->image, single_c->image)}};
+    std::printf("single pass: %.2f ms vs multipass %.2f ms (%u dispatches)\n", single_c->ms, on_c->ms,
+                on_c->stats.dispatches);
+  }
+
+  // --- throttled uploads: frames to converge, 4 bricks per frame
+  {
+    auto rt = BrickRenderer::create(**gpu, **src, ro);
+    if (!rt) return fail(rt.status());
+    BrickFrameSettings f;
+    f.upload_budget_bytes = 4 * (*rt)->pool().brick_bytes();
+    int frames = 0;
+    BrickFrameStats st;
+    for (; frames < 1000; ++frames) {
+      auto img = (*rt)->render(cam, vessel_settings(), f, o.size, o.size, &st);
+      if (!img) return fail(img.status());
+      if (st.lod.missing == 0) break;
+    }
+    doc["throttled"] = {{"bricks_per_frame", 4}, {"frames_to_converge", frames + 1}};
+  }
+
+  auto path = write_report(o.common, "lod", doc, gpu->get());
+  if (!path) return fail(path.status());
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_lod_bench(CLI::App& bench, cli::Invocation& inv) {
+  auto* cmd = bench.add_subcommand(
+      "lod", "out-of-core rendering: constant cost across 256^3..65536^3, empty-space skipping, paged vs monolithic");
+  auto o = std::make_shared<Options>();
+  o->common.repeats = 3;
+  cmd->add_option("--size", o->size, "image width and height in pixels (default 256)")->check(CLI::Range(16, 2048));
+  cmd->add_option("--largest", o->largest, "side of the largest procedural volume (default 65536, max 131072)")
+      ->check(CLI::Range(4096, 131072));
+  add_common_options(cmd, o->common);
+  cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
+}
+
+}  // namespace vxr::bench
