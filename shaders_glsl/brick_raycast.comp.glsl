@@ -9,6 +9,7 @@
 // screen, continuing from the accumulation image (the paper's multipass,
 // batched); see engine/render/lod/brick_renderer.h.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 
 #include "shared/brick_params.h"
 #include "shared/raycast_params.h"
@@ -75,8 +76,15 @@ void main() {
   if (item_mode && !mip && acc.a >= 0.995) return;  // terminated earlier: nothing to add
   uint taken = 0u;
 
-  for (uint b = first; b < last; ++b) {
+  const bool tile_lists = (flags & VXR_BRICK_TILE_LISTS) != 0u;
+  if (tile_lists) {
+    const uvec4 list = items[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x];
+    first = list.x;
+    last = list.x + list.y;
+  }
+  for (uint j = first; j < last; ++j) {
     if (!mip && acc.a >= 0.995) break;  // early ray termination
+    const uint b = tile_lists ? items[j].x : j;
     if (!item_mode && !segment(b, dir, t0, t1)) continue;
     const vec3 e = bricks[b].eye.xyz;
     const vec3 origin = bricks[b].atlas.xyz;
@@ -103,9 +111,11 @@ void main() {
     }
   }
 
-  if (taken > 0u) {
-    const uint old = atomicAdd(samples_lo, taken);
-    if (old + taken < old) atomicAdd(samples_hi, 1u);
+  // One atomic per subgroup, not per ray: contended atomics cost on CPUs.
+  const uint total = subgroupAdd(taken);
+  if (subgroupElect() && total > 0u) {
+    const uint old = atomicAdd(samples_lo, total);
+    if (old + total < old) atomicAdd(samples_hi, 1u);
   }
   if ((flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), acc);
   if ((flags & VXR_BRICK_STORE_FINAL) != 0u) {

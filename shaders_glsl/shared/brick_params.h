@@ -16,6 +16,7 @@ using uvec4 = glm::uvec4;
 #define VXR_BRICK_STORE_ACCUM 2u  // write the rays' state to the accumulation image
 #define VXR_BRICK_STORE_FINAL 4u  // write the finished premultiplied RGBA8 pixel
 #define VXR_BRICK_WORK_ITEMS 8u   // workgroup i marches work item pass.x + i: (brick, tile x, tile y)
+#define VXR_BRICK_TILE_LISTS 16u  // workgroup (x, y) marches its tile's list: items[y * tiles_x + x] = (first, count)
 
 // One brick to march, everything in its own local voxels (level-l voxels,
 // origin at the brick's interior corner): the CPU computes these in double,

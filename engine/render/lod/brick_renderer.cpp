@@ -196,6 +196,8 @@ Result<double> BrickRenderer::cast(VkDescriptorSet set, const LodView& view, con
     };
     if (mode == BrickPassMode::kSinglePass) {
       dispatch(0, bricks, VXR_BRICK_STORE_FINAL);
+    } else if (mode == BrickPassMode::kTiled) {
+      dispatch(0, 0, VXR_BRICK_TILE_LISTS | VXR_BRICK_STORE_FINAL);
     } else {
       dispatch(0, 0, VXR_BRICK_STORE_ACCUM);  // clear
       const uint32_t max_groups = ctx_.limits().maxComputeWorkGroupCount[0];
@@ -248,29 +250,65 @@ glm::uvec4 screen_rect(const BrickBox& b, const LodView& v) {
 }  // namespace
 
 Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<ChunkKey>& draw, const LodView& view) {
-  // Each brick becomes one work item per 8x8 tile its screen rectangle
-  // touches. A brick goes into the wave after the last wave that touched any
-  // of its tiles, so within a wave no two items share a pixel (no races) and
-  // every pixel still sees its bricks front to back across waves.
-  const uint32_t tw = (view.width + 7) / 8, th = (view.height + 7) / 8;
-  std::vector<uint32_t> tile_wave(size_t(tw) * th, 0);
+  // Each brick becomes one work item per 8x8 tile holding a pixel whose ray
+  // hits it. A brick goes into the wave after the last wave that wrote any of
+  // its pixels, so within a wave no two items write the same pixel (the shader
+  // leaves pixels that miss its brick alone) and every pixel still sees its
+  // bricks front to back across waves. Conflicts are tested per pixel (a ray
+  // against the brick's box grown by 0.1%, conservative against float error):
+  // per tile, bricks that merely touch on screen would chain into as many
+  // waves as bricks.
+  const uint32_t w = view.width, h = view.height;
+  const uint32_t tw = (w + 7) / 8, th = (h + 7) / 8;
+  if (ray_dirs_.size() != size_t(w) * h || rays_for_ != std::make_tuple(view.forward, view.right, view.up)) {
+    ray_dirs_.resize(size_t(w) * h);
+    for (uint32_t y = 0; y < h; ++y)
+      for (uint32_t x = 0; x < w; ++x) {
+        const double nx = (x + 0.5) / w * 2.0 - 1.0, ny = (y + 0.5) / h * 2.0 - 1.0;
+        const glm::dvec3 d = glm::normalize(view.forward + nx * view.right - ny * view.up);
+        ray_dirs_[size_t(y) * w + x] = 1.0 / d;  // inverse: the slab test divides
+      }
+    rays_for_ = std::make_tuple(view.forward, view.right, view.up);
+  }
+  pixel_wave_.assign(size_t(w) * h, 0);
+  std::vector<uint8_t> tile_hit(size_t(tw) * th, 0);
   struct Item {
     uint32_t wave, brick, tx, ty;
   };
   std::vector<Item> items;
   uint32_t waves = 0;
+  std::vector<uint32_t> hit_pixels;
   for (uint32_t b = 0; b < draw.size(); ++b) {
     const glm::uvec4 r = screen_rect(chunk_box(src_, draw[b]), view);
     if (r.z == 0 || r.w == 0) continue;
-    const uint32_t x0 = r.x / 8, y0 = r.y / 8, x1 = (r.x + r.z - 1) / 8, y1 = (r.y + r.w - 1) / 8;
+    BrickBox box = chunk_box(src_, draw[b]);
+    const glm::dvec3 grow = 1e-3 * (box.hi - box.lo);
+    box.lo -= grow;
+    box.hi += grow;
+    const glm::dvec3 lo = box.lo - view.eye, hi = box.hi - view.eye;
+    hit_pixels.clear();
     uint32_t wave = 0;
-    for (uint32_t y = y0; y <= y1; ++y)
-      for (uint32_t x = x0; x <= x1; ++x) wave = std::max(wave, tile_wave[size_t(y) * tw + x]);
-    for (uint32_t y = y0; y <= y1; ++y)
-      for (uint32_t x = x0; x <= x1; ++x) {
-        tile_wave[size_t(y) * tw + x] = wave + 1;
-        items.push_back({wave, b, x * 8, y * 8});
+    for (uint32_t y = r.y; y < r.y + r.w; ++y)
+      for (uint32_t x = r.x; x < r.x + r.z; ++x) {
+        const glm::dvec3& inv = ray_dirs_[size_t(y) * w + x];
+        const glm::dvec3 ta = lo * inv, tb = hi * inv;
+        const glm::dvec3 tmin = glm::min(ta, tb), tmax = glm::max(ta, tb);
+        const double t0 = std::max({tmin.x, tmin.y, tmin.z, 0.0}), t1 = std::min({tmax.x, tmax.y, tmax.z});
+        if (!(t1 >= t0)) continue;
+        const uint32_t pi = y * w + x;
+        hit_pixels.push_back(pi);
+        wave = std::max(wave, pixel_wave_[pi]);
       }
+    if (hit_pixels.empty()) continue;
+    for (uint32_t pi : hit_pixels) {
+      pixel_wave_[pi] = wave + 1;
+      const size_t t = size_t((pi / w) / 8) * tw + (pi % w) / 8;
+      if (tile_hit[t] != 1) {
+        tile_hit[t] = 1;
+        items.push_back({wave, b, uint32_t((pi % w) / 8) * 8, uint32_t((pi / w) / 8) * 8});
+      }
+    }
+    for (uint32_t pi : hit_pixels) tile_hit[size_t((pi / w) / 8) * tw + (pi % w) / 8] = 0;
     waves = std::max(waves, wave + 1);
   }
   if (items.size() > opt_.max_work_items)
@@ -285,6 +323,29 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
     ++out[items[i].wave].y;
   }
   return out;
+}
+
+Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view) {
+  const uint32_t tw = (view.width + 7) / 8, th = (view.height + 7) / 8;
+  std::vector<std::vector<uint32_t>> lists(size_t(tw) * th);
+  size_t total = lists.size();
+  for (uint32_t b = 0; b < draw.size(); ++b) {
+    const glm::uvec4 r = screen_rect(chunk_box(src_, draw[b]), view);
+    if (r.z == 0 || r.w == 0) continue;
+    for (uint32_t y = r.y / 8; y <= (r.y + r.w - 1) / 8; ++y)
+      for (uint32_t x = r.x / 8; x <= (r.x + r.z - 1) / 8; ++x) lists[size_t(y) * tw + x].push_back(b);
+  }
+  for (const auto& l : lists) total += l.size();
+  if (total > opt_.max_work_items)
+    return out_of_range("render: the view needs " + std::to_string(total) + " tile entries, the work list holds " +
+                        std::to_string(opt_.max_work_items) + "; raise the LOD bias or use a smaller image");
+  auto* dst = static_cast<glm::uvec4*>(items_.mapped);
+  uint32_t next = static_cast<uint32_t>(lists.size());
+  for (size_t t = 0; t < lists.size(); ++t) {
+    dst[t] = glm::uvec4(next, uint32_t(lists[t].size()), 0, 0);
+    for (uint32_t b : lists[t]) dst[next++] = glm::uvec4(b, 0, 0, 0);
+  }
+  return Status::ok();
 }
 
 Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RaycastSettings& s,
@@ -320,6 +381,8 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RaycastSett
   std::vector<glm::uvec2> waves;
   if (frame.mode == BrickPassMode::kMultipass) {
     VXR_ASSIGN_OR_RETURN(waves, build_waves(lod.draw, view));
+  } else if (frame.mode == BrickPassMode::kTiled) {
+    VXR_RETURN_IF_ERROR(build_tile_lists(lod.draw, view));
   }
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;
   st.hit_rate = wanted ? double(lod.stats.drawn - lod.stats.fallback) / double(wanted) : 1.0;

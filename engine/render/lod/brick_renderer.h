@@ -21,6 +21,8 @@
 #pragma once
 
 #include <memory>
+#include <tuple>
+#include <vector>
 
 #include "core/image.h"
 #include "core/status.h"
@@ -34,7 +36,7 @@
 
 namespace vxr {
 
-enum class BrickPassMode { kSinglePass, kMultipass };
+enum class BrickPassMode { kSinglePass, kTiled, kMultipass };
 
 struct BrickRendererOptions {
   BrickPoolOptions pool;
@@ -94,6 +96,8 @@ class BrickRenderer {
                       BrickFrameStats* stats);
   // Multipass work items (brick, 8x8 tile) grouped into waves; returns (first item, count) per wave.
   Result<std::vector<glm::uvec2>> build_waves(const std::vector<ChunkKey>& draw, const LodView& view);
+  // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen rectangle touches it.
+  Status build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view);
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
   gpu::Context& ctx_;
@@ -108,6 +112,9 @@ class BrickRenderer {
   gpu::Buffer table_, counters_, items_;
   std::string tf_key_;
   uint32_t mono_level_ = UINT32_MAX;
+  std::vector<glm::dvec3> ray_dirs_;  // per pixel 1/direction, for build_waves
+  std::tuple<glm::dvec3, glm::dvec3, glm::dvec3> rays_for_;
+  std::vector<uint32_t> pixel_wave_;
   double value_scale_ = 255.0;
 };
 
