@@ -115,7 +115,7 @@ TEST_CASE("lod: bricks come out front to back along every ray") {
   CHECK(checked > 100);
 }
 
-TEST_CASE("lod: frustum, cut plane and ROI cull whole bricks; empty bricks are skipped") {
+TEST_CASE("lod: frustum, cut plane and ROI cull whole bricks, and empty bricks are skipped") {
   auto src = make(256);
   const Camera cam = orbit_camera({{256, 256, 256}, {1, 1, 1}}, 30, 25, 0.5, 30);
   const LodView v = view_of(*src, cam, 128, 128);
