@@ -1,5 +1,6 @@
 # Runs a vxr command line and checks its exit code and output.
 #   -DVXR=path -DARGS="arg|arg|..." -DEXPECT_RC=0 [-DEXPECT_STDOUT=regex] [-DEXPECT_STDERR=regex] [-DEXPECT_FILE=path]
+#   [-DEXPECT_NO_FILE=path]  (a file that must not exist afterwards)
 string(REPLACE "|" ";" args "${ARGS}")
 execute_process(COMMAND ${VXR} ${args} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 message("stdout: ${out}")
@@ -15,4 +16,7 @@ if(DEFINED EXPECT_STDERR AND NOT err MATCHES "${EXPECT_STDERR}")
 endif()
 if(DEFINED EXPECT_FILE AND NOT EXISTS "${EXPECT_FILE}")
   message(FATAL_ERROR "expected file ${EXPECT_FILE} was not written")
+endif()
+if(DEFINED EXPECT_NO_FILE AND EXISTS "${EXPECT_NO_FILE}")
+  message(FATAL_ERROR "file ${EXPECT_NO_FILE} must not exist, but it does")
 endif()

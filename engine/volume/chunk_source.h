@@ -46,7 +46,9 @@ struct LevelInfo {
   std::array<uint32_t, 3> downsample{1, 1, 1};    // level-0 voxels per voxel of this level, per axis
 };
 
-// Min/max of a chunk's interior in data units; known without decoding.
+// Min/max of a chunk's whole payload (interior and apron, so a superset of the
+// interior's range) in data units; known without decoding. min == max means
+// every payload voxel has that value.
 struct ChunkStats {
   double min = 0.0;
   double max = 0.0;

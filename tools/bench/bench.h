@@ -39,5 +39,6 @@ Result<std::string> write_report(const BenchOptions& options, const std::string&
 void add_roofline_bench(CLI::App& bench, cli::Invocation& inv);
 void add_xr_bench(CLI::App& bench, cli::Invocation& inv);
 void add_lod_bench(CLI::App& bench, cli::Invocation& inv);
+void add_import_bench(CLI::App& bench, cli::Invocation& inv);
 
 }  // namespace vxr::bench

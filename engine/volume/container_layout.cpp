@@ -1,0 +1,167 @@
+#include "volume/container_layout.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace vxr {
+
+uint64_t ContainerLayout::chunks_in_level(uint32_t level) const {
+  const auto& c = levels.at(level).chunk_counts;
+  return uint64_t(c[0]) * c[1] * c[2];
+}
+
+uint64_t ContainerLayout::total_chunks() const {
+  uint64_t n = 0;
+  for (uint32_t l = 0; l < levels.size(); ++l) n += chunks_in_level(l);
+  return n * info.channels * info.timepoints;
+}
+
+bool ContainerLayout::contains(const ChunkKey& k) const {
+  if (k.level >= levels.size() || k.channel >= info.channels || k.timepoint >= info.timepoints) return false;
+  const auto& c = levels[k.level].chunk_counts;
+  return k.x < c[0] && k.y < c[1] && k.z < c[2];
+}
+
+std::vector<LevelInfo> plan_pyramid(const std::array<uint64_t, 3>& dims, const std::array<double, 3>& voxel_size,
+                                    uint32_t chunk_size) {
+  std::vector<LevelInfo> levels;
+  LevelInfo cur;
+  cur.dims = dims;
+  std::array<double, 3> vs = voxel_size;
+  for (;;) {
+    for (int a = 0; a < 3; ++a) cur.chunk_counts[a] = static_cast<uint32_t>((cur.dims[a] + chunk_size - 1) / chunk_size);
+    levels.push_back(cur);
+    if (cur.chunk_counts[0] == 1 && cur.chunk_counts[1] == 1 && cur.chunk_counts[2] == 1) break;
+    if (levels.size() >= vxc::kMaxLevels) break;
+    const double coarsest = std::max({vs[0], vs[1], vs[2]});
+    LevelInfo next = cur;
+    bool any = false;
+    // Fine axes are halved (all of them once roughly isotropic); an axis down to one voxel stays.
+    bool fine[3];
+    for (int a = 0; a < 3; ++a) fine[a] = vs[a] * std::sqrt(2.0) < coarsest;
+    const bool all_iso = !fine[0] && !fine[1] && !fine[2];
+    for (int a = 0; a < 3; ++a) {
+      if ((fine[a] || all_iso) && cur.dims[a] > 1) {
+        next.dims[a] = (cur.dims[a] + 1) / 2;
+        next.downsample[a] = cur.downsample[a] * 2;
+        vs[a] *= 2;
+        any = true;
+      }
+    }
+    if (!any) break;
+    cur = next;
+  }
+  return levels;
+}
+
+Result<ContainerLayout> make_layout(const VolumeInfo& info, uint32_t chunk_size, uint32_t apron,
+                                    vxc::Downsample downsample, vxc::Codec codec) {
+  if (chunk_size < 8 || chunk_size > 512) return invalid_argument("--chunk must be between 8 and 512 voxels");
+  if (apron > 4) return invalid_argument("apron must be between 0 and 4 voxels");
+  for (int a = 0; a < 3; ++a) {
+    if (info.dims[a] == 0 || info.dims[a] > (uint64_t(1) << 40)) return invalid_argument("volume dims must be 1..2^40");
+    if (!(info.voxel_size[a] > 0) || !std::isfinite(info.voxel_size[a]))
+      return invalid_argument("voxel size must be three positive numbers");
+  }
+  if (info.channels == 0 || info.timepoints == 0) return invalid_argument("channels and timepoints must be >= 1");
+  if (info.unit.size() > 15) return invalid_argument("unit '" + info.unit + "' is longer than 15 bytes");
+  ContainerLayout layout;
+  layout.info = info;
+  layout.chunk_size = chunk_size;
+  layout.apron = apron;
+  layout.downsample = downsample;
+  layout.codec = codec;
+  layout.levels = plan_pyramid(info.dims, info.voxel_size, chunk_size);
+  return layout;
+}
+
+std::vector<uint8_t> serialize_header(const ContainerLayout& layout) {
+  vxc::FileHeader h;
+  std::memset(&h, 0, sizeof h);
+  std::memcpy(h.magic, vxc::kFileMagic, 8);
+  h.version = vxc::kVersion;
+  const uint32_t nlev = static_cast<uint32_t>(layout.levels.size());
+  h.header_bytes = static_cast<uint32_t>(sizeof(vxc::FileHeader) + nlev * sizeof(vxc::LevelRecord) + 8);
+  for (int a = 0; a < 3; ++a) {
+    h.dims[a] = layout.info.dims[a];
+    h.voxel_size[a] = layout.info.voxel_size[a];
+  }
+  h.channels = layout.info.channels;
+  h.timepoints = layout.info.timepoints;
+  std::memcpy(h.unit, layout.info.unit.data(), std::min<size_t>(layout.info.unit.size(), 15));
+  h.chunk_size = layout.chunk_size;
+  h.apron = layout.apron;
+  h.levels = nlev;
+  h.dtype = static_cast<uint8_t>(layout.info.dtype);
+  h.downsample = static_cast<uint8_t>(layout.downsample);
+  h.codec = static_cast<uint8_t>(layout.codec);
+  std::vector<uint8_t> out(h.header_bytes);
+  std::memcpy(out.data(), &h, sizeof h);
+  for (uint32_t l = 0; l < nlev; ++l) {
+    vxc::LevelRecord r;
+    for (int a = 0; a < 3; ++a) {
+      r.dims[a] = layout.levels[l].dims[a];
+      r.chunk_counts[a] = layout.levels[l].chunk_counts[a];
+      r.downsample[a] = layout.levels[l].downsample[a];
+    }
+    std::memcpy(out.data() + sizeof h + l * sizeof r, &r, sizeof r);
+  }
+  const uint64_t sum = vxc::checksum(out.data(), out.size() - 8);
+  std::memcpy(out.data() + out.size() - 8, &sum, 8);
+  return out;
+}
+
+Result<ContainerLayout> parse_header(std::span<const uint8_t> bytes, const std::string& what, uint64_t* header_bytes) {
+  vxc::FileHeader h;
+  if (bytes.size() < sizeof h) return corrupt(what + ": too short to be a .vxc container");
+  std::memcpy(&h, bytes.data(), sizeof h);
+  if (std::memcmp(h.magic, vxc::kFileMagic, 8) != 0) return corrupt(what + ": not a .vxc container (bad magic)");
+  if (h.version == 0 || h.version > vxc::kVersion)
+    return unsupported(what + ": container version " + std::to_string(h.version) +
+                       " is newer than this vxr reads (" + std::to_string(vxc::kVersion) + "); update vxr");
+  if (h.levels == 0 || h.levels > vxc::kMaxLevels ||
+      h.header_bytes != sizeof h + h.levels * sizeof(vxc::LevelRecord) + 8)
+    return corrupt(what + ": header is damaged (level count / header size)");
+  if (bytes.size() < h.header_bytes) return corrupt(what + ": header is truncated");
+  uint64_t stored;
+  std::memcpy(&stored, bytes.data() + h.header_bytes - 8, 8);
+  if (stored != vxc::checksum(bytes.data(), h.header_bytes - 8))
+    return corrupt(what + ": header checksum mismatch (the file is damaged)");
+  if (h.dtype > static_cast<uint8_t>(DType::kF32) || h.downsample > 1 || h.codec > 3)
+    return corrupt(what + ": header names an unknown dtype, downsample mode or codec");
+  ContainerLayout L;
+  for (int a = 0; a < 3; ++a) {
+    L.info.dims[a] = h.dims[a];
+    L.info.voxel_size[a] = h.voxel_size[a];
+  }
+  L.info.dtype = static_cast<DType>(h.dtype);
+  L.info.channels = h.channels;
+  L.info.timepoints = h.timepoints;
+  L.info.unit = std::string(h.unit, strnlen(h.unit, 15));
+  L.chunk_size = h.chunk_size;
+  L.apron = h.apron;
+  L.downsample = static_cast<vxc::Downsample>(h.downsample);
+  L.codec = static_cast<vxc::Codec>(h.codec);
+  if (L.chunk_size < 8 || L.chunk_size > 512 || L.apron > 4 || !L.info.channels || !L.info.timepoints)
+    return corrupt(what + ": header holds impossible chunk size, apron, channels or timepoints");
+  for (uint32_t l = 0; l < h.levels; ++l) {
+    vxc::LevelRecord r;
+    std::memcpy(&r, bytes.data() + sizeof h + l * sizeof r, sizeof r);
+    LevelInfo li;
+    for (int a = 0; a < 3; ++a) {
+      li.dims[a] = r.dims[a];
+      li.chunk_counts[a] = r.chunk_counts[a];
+      li.downsample[a] = r.downsample[a];
+      if (r.dims[a] == 0 || (r.dims[a] + L.chunk_size - 1) / L.chunk_size != r.chunk_counts[a])
+        return corrupt(what + ": level " + std::to_string(l) + " record is inconsistent");
+    }
+    L.levels.push_back(li);
+  }
+  for (int a = 0; a < 3; ++a)
+    if (L.levels[0].dims[a] != L.info.dims[a]) return corrupt(what + ": level 0 dims differ from the volume dims");
+  *header_bytes = h.header_bytes;
+  return L;
+}
+
+}  // namespace vxr

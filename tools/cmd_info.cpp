@@ -1,0 +1,75 @@
+// `vxr info`: what a .vxc container holds.
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "command.h"
+#include "volume/container_reader.h"
+
+namespace vxr::cli {
+
+void add_info_command(CLI::App& app, Invocation& inv) {
+  auto path = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  auto* cmd = app.add_subcommand("info", "describe a .vxc container (dims, dtype, channels, levels, chunks)");
+  cmd->add_option("file", *path, ".vxc file")->required();
+  cmd->add_flag("--json", *json, "print JSON");
+  cmd->callback([&inv, path, json] {
+    inv.run = [path, json] {
+      auto reader = ContainerReader::open(*path);
+      if (!reader) return fail(reader.status());
+      const ContainerReader& r = **reader;
+      const VolumeInfo& i = r.info();
+      const auto& L = r.layout();
+      uint64_t uniform = 0;
+      for (const auto& e : r.entries()) uniform += e.codec == static_cast<uint8_t>(vxc::Codec::kUniform);
+      const char* codec_names[] = {"raw", "lz4", "shuffle-lz4", "uniform"};
+      if (*json) {
+        nlohmann::json j;
+        j["dims"] = {i.dims[0], i.dims[1], i.dims[2]};
+        j["dtype"] = dtype_name(i.dtype);
+        j["channels"] = i.channels;
+        j["timepoints"] = i.timepoints;
+        j["voxel_size"] = {i.voxel_size[0], i.voxel_size[1], i.voxel_size[2]};
+        j["unit"] = i.unit;
+        j["levels"] = r.levels().size();
+        j["chunks"] = r.entries().size();
+        j["compression_ratio"] = r.compression_ratio();
+        j["chunk_size"] = r.chunk_size();
+        j["apron"] = r.apron();
+        j["uniform_chunks"] = uniform;
+        j["file_bytes"] = r.file_bytes();
+        j["codec"] = codec_names[static_cast<int>(L.codec)];
+        j["downsample"] = L.downsample == vxc::Downsample::kMax ? "max" : "mean";
+        nlohmann::json levels = nlohmann::json::array();
+        for (const auto& li : r.levels())
+          levels.push_back({{"dims", {li.dims[0], li.dims[1], li.dims[2]}},
+                            {"chunk_counts", {li.chunk_counts[0], li.chunk_counts[1], li.chunk_counts[2]}},
+                            {"downsample", {li.downsample[0], li.downsample[1], li.downsample[2]}}});
+        j["level_info"] = levels;
+        std::printf("%s\n", j.dump(2).c_str());
+        return kExitOk;
+      }
+      std::printf("file:        %s (%llu bytes)\n", path->c_str(), (unsigned long long)r.file_bytes());
+      std::printf("dims:        %llu x %llu x %llu\n", (unsigned long long)i.dims[0], (unsigned long long)i.dims[1],
+                  (unsigned long long)i.dims[2]);
+      std::printf("dtype:       %s\n", dtype_name(i.dtype));
+      std::printf("channels:    %u\ntimepoints:  %u\n", i.channels, i.timepoints);
+      std::printf("voxel size:  %g x %g x %g %s\n", i.voxel_size[0], i.voxel_size[1], i.voxel_size[2], i.unit.c_str());
+      std::printf("chunks:      %zu of %u^3 (+%u apron), %llu uniform, codec %s\n", r.entries().size(), r.chunk_size(),
+                  r.apron(), (unsigned long long)uniform, codec_names[static_cast<int>(L.codec)]);
+      std::printf("compression: %.2f : 1\n", r.compression_ratio());
+      std::printf("levels:      %zu (%s downsampling)\n", r.levels().size(),
+                  L.downsample == vxc::Downsample::kMax ? "max" : "mean");
+      for (size_t l = 0; l < r.levels().size(); ++l) {
+        const auto& li = r.levels()[l];
+        std::printf("  %2zu: %llu x %llu x %llu voxels, %u x %u x %u chunks, downsample %u,%u,%u\n", l,
+                    (unsigned long long)li.dims[0], (unsigned long long)li.dims[1], (unsigned long long)li.dims[2],
+                    li.chunk_counts[0], li.chunk_counts[1], li.chunk_counts[2], li.downsample[0], li.downsample[1],
+                    li.downsample[2]);
+      }
+      return kExitOk;
+    };
+  });
+}
+
+}  // namespace vxr::cli
