@@ -33,18 +33,18 @@ std::unique_ptr<BrickRenderer> renderer(const ChunkSource& src) {
   return std::move(r).value();
 }
 
-RaycastSettings vessels() {
-  RaycastSettings s;
-  s.colormap = "hot";
-  s.window_lo = 8;  // above the background noise (0..6): empty bricks are transparent
-  s.window_hi = 200;
+RenderSettings vessels() {
+  RenderSettings s;
+  s.channels[0].colormap = "hot";
+  s.channels[0].window_lo = 8;  // above the background noise (0..6): empty bricks are transparent
+  s.channels[0].window_hi = 200;
   s.step_voxels = 0.5;
   s.density = 0.3;
   return s;
 }
 
 // Renders until nothing is missing; returns the last frame.
-ImageRgba8 converge(BrickRenderer& r, const Camera& cam, const RaycastSettings& s, const BrickFrameSettings& f,
+ImageRgba8 converge(BrickRenderer& r, const Camera& cam, const RenderSettings& s, const BrickFrameSettings& f,
                     uint32_t w, uint32_t h, BrickFrameStats* st = nullptr) {
   BrickFrameStats local;
   for (int i = 0; i < 64; ++i) {
@@ -130,8 +130,8 @@ TEST_CASE("brick render: paged through the pool equals the single-texture path w
 TEST_CASE("brick render: with uploads throttled every frame is complete and converges to the full-resolution image") {
   test::GpuTestScope scope;
   auto src = make(128);
-  RaycastSettings s = vessels();
-  s.window_lo = -50;  // every voxel, even a zero, has some opacity: every ray through the volume gets alpha
+  RenderSettings s = vessels();
+  s.channels[0].window_lo = -50;  // every voxel, even a zero, has some opacity: every ray through the volume gets alpha
   s.density = 0.05;
   const Camera cam = orbit_camera({{128, 128, 128}, {1, 1, 1}}, 30, 25, 1.25);
   BrickFrameSettings f;

@@ -1,6 +1,8 @@
 // `vxr demo`: renders the bundled sample volume to DIR/demo.png.
 #include <cstdio>
+#include <algorithm>
 #include <filesystem>
+#include <vector>
 
 #include "assets/assets.h"
 #include "command.h"
@@ -24,20 +26,39 @@ void add_demo_command(CLI::App& app, Invocation& inv) {
       if (!caster) return fail(caster.status());
       if (Status s = (*caster)->set_volume(*volume); !s) return fail(s);
 
+      // Four views of the head, 256x256 each, in one 512x512 picture: emission-absorption
+      // (hot), MIP (viridis), the shaded skin isosurface, and colour by depth (turbo).
       const VolumePlacement placement{volume->dims, volume->voxel_size};
-      RaycastSettings settings;
-      settings.colormap = "hot";
-      settings.window_lo = 20;
-      settings.window_hi = 220;
-      settings.step_voxels = 0.5;
-      settings.density = 0.08;
-      auto image = (*caster)->render(orbit_camera(placement, 30.0, 25.0, 1.25), settings, 512, 512);
-      if (!image) return fail(image.status());
+      const Camera camera = orbit_camera(placement, 30.0, 25.0, 1.25);
+      RenderSettings base;
+      base.channels[0].window_lo = 20;
+      base.channels[0].window_hi = 220;
+      base.step_voxels = 0.5;
+      base.density = 0.08;
+      std::vector<RenderSettings> views(4, base);
+      views[0].channels[0].colormap = "hot";
+      views[1].model = OpticalModel::kMip;
+      views[1].channels[0].colormap = "viridis";
+      views[2].model = OpticalModel::kIsosurface;
+      views[2].iso_value = 60;
+      views[2].channels[0].colormap = "gray";
+      views[3].channels[0].colormap = "turbo";
+      views[3].depth_color = DepthColorMode::kView;
+      views[3].density = 0.2;
+      ImageRgba8 mosaic(512, 512);
+      for (int k = 0; k < 4; ++k) {
+        auto image = (*caster)->render(camera, views[k], 256, 256);
+        if (!image) return fail(image.status());
+        const ImageRgba8 shown = over_black(*image);
+        for (uint32_t y = 0; y < 256; ++y)
+          for (uint32_t x = 0; x < 256; ++x)
+            std::copy_n(shown.at(x, y), 4, mosaic.at(x + (k % 2) * 256, y + (k / 2) * 256));
+      }
 
       std::error_code ec;
       std::filesystem::create_directories(*out_dir, ec);
       const std::string path = (std::filesystem::path(*out_dir) / "demo.png").string();
-      if (Status s = write_png(path, over_black(*image)); !s) return fail(s);
+      if (Status s = write_png(path, mosaic); !s) return fail(s);
       std::printf("%s\n", path.c_str());
       return kExitOk;
     };

@@ -33,7 +33,7 @@ Result<std::unique_ptr<EyeRenderer>> EyeRenderer::create(gpu::Context& ctx, cons
 }
 
 Result<ImageRgba8> EyeRenderer::render(const ViewSpec& view, const VolumeTransform& t,
-                                       const RaycastSettings& settings, const LensWarp& warp, uint64_t* rays) {
+                                       const RenderSettings& settings, const LensWarp& warp, uint64_t* rays) {
   VXR_TRACE_SCOPE("xr.render_view");
   const Camera camera = camera_for_view(view, t);
   if (warp.enabled) return render_lens_warped(*caster_, camera, settings, view.width, view.height, warp, rays);

@@ -23,7 +23,7 @@ class EyeRenderer {
   static Result<std::unique_ptr<EyeRenderer>> create(gpu::Context& ctx, const DenseVolume& volume);
 
   // Premultiplied RGBA of `view`; `rays` receives the rays cast.
-  Result<ImageRgba8> render(const ViewSpec& view, const VolumeTransform& t, const RaycastSettings& settings,
+  Result<ImageRgba8> render(const ViewSpec& view, const VolumeTransform& t, const RenderSettings& settings,
                             const LensWarp& warp, uint64_t* rays = nullptr);
 
   // Copies `image` (shown over black, opaque) into `target`, which must be

@@ -32,7 +32,7 @@ double WarpAxis::to_warped(double p) const {
   return edge_warped + centre + (p - e - centre) / s;
 }
 
-Result<ImageRgba8> render_lens_warped(Raycaster& caster, const Camera& camera, const RaycastSettings& settings,
+Result<ImageRgba8> render_lens_warped(Raycaster& caster, const Camera& camera, const RenderSettings& settings,
                                       uint32_t width, uint32_t height, const LensWarp& warp, uint64_t* rays) {
   VXR_TRACE_SCOPE("xr.render_lens_warped");
   if (!camera.frustum) return invalid_argument("render_lens_warped: the camera needs an off-axis frustum");

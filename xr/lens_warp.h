@@ -43,7 +43,7 @@ WarpAxis warp_axis(uint32_t full, const LensWarp& warp);
 // Renders `camera` (its frustum must be set) at width x height output pixels
 // through the warped grid and resamples it. `rays` (if given) receives the
 // number of rays cast.
-Result<ImageRgba8> render_lens_warped(Raycaster& caster, const Camera& camera, const RaycastSettings& settings,
+Result<ImageRgba8> render_lens_warped(Raycaster& caster, const Camera& camera, const RenderSettings& settings,
                                       uint32_t width, uint32_t height, const LensWarp& warp,
                                       uint64_t* rays = nullptr);
 

@@ -88,11 +88,11 @@ Result<Outcome> run_once(FrameTarget& target, const DenseVolume& volume, const V
 
 }  // namespace
 
-RaycastSettings default_view_settings() {
-  RaycastSettings s;
-  s.colormap = "hot";
-  s.window_lo = 20;
-  s.window_hi = 220;
+RenderSettings default_view_settings() {
+  RenderSettings s;
+  s.channels[0].colormap = "hot";
+  s.channels[0].window_lo = 20;
+  s.channels[0].window_hi = 220;
   s.step_voxels = 0.5;
   s.density = 0.08;
   return s;

@@ -27,7 +27,7 @@ namespace vxr::xr {
 
 struct ViewOptions {
   uint64_t frames = 0;  // rendered frames before an orderly exit; 0: until the target ends
-  RaycastSettings settings;
+  RenderSettings settings;
   LensWarp warp;
   int max_restarts = 3;
   // Called after each rendered frame with the images of its views (mirror
@@ -49,8 +49,8 @@ struct ViewStats {
 
 using TargetFactory = std::function<Result<std::unique_ptr<FrameTarget>>()>;
 
-// The RaycastSettings `vxr view` uses for 8-bit data of unknown content.
-RaycastSettings default_view_settings();
+// The RenderSettings `vxr view` uses for 8-bit data of unknown content.
+RenderSettings default_view_settings();
 
 Result<ViewStats> run_view(const TargetFactory& make_target, const DenseVolume& volume, const ViewOptions& options,
                            const VolumeTransform& initial);

@@ -54,6 +54,79 @@ Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const Comput
   return p;
 }
 
+Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const FullscreenPipelineCreateInfo& info) {
+  VkDevice dev = ctx.device();
+  ComputePipeline p;
+  VkDescriptorSetLayoutCreateInfo dl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  dl.bindingCount = static_cast<uint32_t>(info.bindings.size());
+  dl.pBindings = info.bindings.data();
+  VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateDescriptorSetLayout(dev, &dl, nullptr, &set_layout));
+  p.set_layout = Handle<VkDescriptorSetLayout>(dev, set_layout);
+  VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  pl.setLayoutCount = 1;
+  pl.pSetLayouts = &set_layout;
+  VkPipelineLayout layout = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreatePipelineLayout(dev, &pl, nullptr, &layout));
+  p.layout = Handle<VkPipelineLayout>(dev, layout);
+
+  VXR_ASSIGN_OR_RETURN(Handle<VkShaderModule> vs, create_shader_module(ctx, info.vertex_shader));
+  VXR_ASSIGN_OR_RETURN(Handle<VkShaderModule> fs, create_shader_module(ctx, info.fragment_shader));
+  VkPipelineShaderStageCreateInfo stages[2] = {};
+  stages[0] = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+  stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
+  stages[0].module = vs;
+  stages[0].pName = "main";
+  stages[1] = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+  stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+  stages[1].module = fs;
+  stages[1].pName = "main";
+
+  VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+  VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+  ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+  VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+  vp.viewportCount = 1;
+  vp.scissorCount = 1;
+  VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+  rs.polygonMode = VK_POLYGON_MODE_FILL;
+  rs.cullMode = VK_CULL_MODE_NONE;
+  rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+  rs.lineWidth = 1.0f;
+  VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+  ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+  VkPipelineColorBlendAttachmentState att{};
+  att.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
+                       VK_COLOR_COMPONENT_A_BIT;
+  VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+  cb.attachmentCount = 1;
+  cb.pAttachments = &att;
+  const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+  VkPipelineDynamicStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+  ds.dynamicStateCount = 2;
+  ds.pDynamicStates = dyn;
+  VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+  rendering.colorAttachmentCount = 1;
+  rendering.pColorAttachmentFormats = &info.color_format;
+
+  VkGraphicsPipelineCreateInfo ci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+  ci.pNext = &rendering;
+  ci.stageCount = 2;
+  ci.pStages = stages;
+  ci.pVertexInputState = &vi;
+  ci.pInputAssemblyState = &ia;
+  ci.pViewportState = &vp;
+  ci.pRasterizationState = &rs;
+  ci.pMultisampleState = &ms;
+  ci.pColorBlendState = &cb;
+  ci.pDynamicState = &ds;
+  ci.layout = layout;
+  VkPipeline pipeline = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
+  p.pipeline = Handle<VkPipeline>(dev, pipeline);
+  return p;
+}
+
 Result<Handle<VkDescriptorPool>> create_descriptor_pool(const Context& ctx,
                                                         const std::vector<VkDescriptorSetLayoutBinding>& bindings,
                                                         uint32_t max_sets) {

@@ -32,6 +32,18 @@ struct ComputePipeline {
 
 Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const ComputePipelineCreateInfo& info);
 
+// A graphics pipeline that draws one full-screen triangle (3 vertices, no
+// vertex buffer) into one colour attachment with dynamic rendering; viewport
+// and scissor are dynamic. No blending, no depth.
+struct FullscreenPipelineCreateInfo {
+  std::string_view vertex_shader;    // embedded name, e.g. "fullscreen.vert"
+  std::string_view fragment_shader;  // e.g. "raycast.frag"
+  std::vector<VkDescriptorSetLayoutBinding> bindings;  // set 0
+  VkFormat color_format = VK_FORMAT_R8G8B8A8_UNORM;
+};
+// Same members as a compute pipeline: set layout, layout, pipeline.
+Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const FullscreenPipelineCreateInfo& info);
+
 // A descriptor pool sized for `max_sets` sets of the given bindings each.
 Result<Handle<VkDescriptorPool>> create_descriptor_pool(const Context& ctx,
                                                         const std::vector<VkDescriptorSetLayoutBinding>& bindings,

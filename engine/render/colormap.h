@@ -1,4 +1,8 @@
-// Colour lookup tables by name.
+// Colour lookup tables by name: 256 entries, entry i at x = i / 255.
+//
+// viridis, magma, inferno, plasma and turbo are matplotlib's published tables
+// (assets/colormaps/, licences in LICENSE.md there), embedded in the binary;
+// gray, hot and the single-hue maps (black to the full hue) are generated.
 #pragma once
 
 #include <array>
@@ -10,7 +14,7 @@
 
 namespace vxr {
 
-using ColormapTable = std::array<glm::vec3, 256>;
+using ColormapTable = std::array<glm::dvec3, 256>;
 
 // nullopt for an unknown name.
 std::optional<ColormapTable> find_colormap(std::string_view name);

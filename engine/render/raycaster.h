@@ -1,12 +1,17 @@
-// The GPU ray caster over one 3D texture (the whole volume at one level).
+// The GPU ray caster over whole volumes held in 3D textures (one per channel).
 //
-// Owns the volume texture, the transfer-function texture and the compute
-// pipeline; render() dispatches one ray per pixel and reads the image back.
-// The renderer never opens files: callers hand it a DenseVolume.
+// Owns the volume textures, the transfer-function table, an optional depth
+// image, the compute pipeline (default path) and the full-screen fragment
+// pipeline; both run the same GLSL core (shaders_glsl/include/raycast_core.glsl).
+// render() casts one ray per pixel into an RGBA32F image and reads it back;
+// 8-bit output is rounded on the CPU (to_rgba8), the same way for the CPU
+// reference. The renderer never opens files: callers hand it DenseVolumes.
 #pragma once
 
 #include <memory>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "core/image.h"
 #include "core/status.h"
@@ -15,50 +20,70 @@
 #include "gpu/resources.h"
 #include "gpu/timer.h"
 #include "render/camera.h"
+#include "scene/render_settings.h"
 #include "volume/dense_volume.h"
 
 namespace vxr {
 
-enum class OpticalModel { kEmissionAbsorption, kMip };
-
-struct RaycastSettings {
-  OpticalModel model = OpticalModel::kEmissionAbsorption;
-  std::string colormap = "gray";
-  // Window in the data's own units; values below lo map to 0, above hi to 1.
-  double window_lo = 0.0;
-  double window_hi = 255.0;
-  double step_voxels = 0.5;
-  // Extinction per voxel where the transfer function's opacity is 1.
-  double density = 0.25;
-  uint32_t max_steps = 1u << 16;
+// Premultiplied RGBA floats, row-major, top row first.
+struct ImageRgbaF {
+  uint32_t width = 0, height = 0;
+  std::vector<float> rgba;
 };
+
+// Rounds to nearest (v * 255 + 0.5, clamped): the one float -> 8-bit rule.
+ImageRgba8 to_rgba8(const ImageRgbaF& image);
+
+enum class RenderPath { kCompute, kFragment };
 
 class Raycaster {
  public:
   static Result<std::unique_ptr<Raycaster>> create(gpu::Context& ctx);
 
-  // Uploads the volume as an R8/R16 UNORM 3D texture (u8 / u16 data).
+  // One channel. u8 / u16 go up as R8 / R16 UNORM textures (window in data
+  // units, divided by 255 / 65535 on the way); every other dtype as R32 float.
   Status set_volume(const DenseVolume& volume);
-  // Renders premultiplied RGBA, top row first.
-  Result<ImageRgba8> render(const Camera& camera, const RaycastSettings& settings, uint32_t width, uint32_t height);
+  // 1..4 channels of the same dims and voxel size.
+  Status set_channels(std::span<const DenseVolume> channels);
+  // The depth image rays end at: view depth per pixel (world units along the
+  // camera's forward axis, what a mesh pass writes), +inf where nothing is.
+  // Its size must match the render size. clear_depth() removes it.
+  Status set_depth(std::span<const float> view_depth, uint32_t width, uint32_t height);
+  void clear_depth() { has_depth_ = false; }
+
+  Result<ImageRgbaF> render_float(const Camera& camera, const RenderSettings& settings, uint32_t width,
+                                  uint32_t height, RenderPath path = RenderPath::kCompute);
+  // Premultiplied RGBA8, top row first.
+  Result<ImageRgba8> render(const Camera& camera, const RenderSettings& settings, uint32_t width, uint32_t height,
+                            RenderPath path = RenderPath::kCompute);
+
+  uint32_t channel_count() const { return static_cast<uint32_t>(value_scales_.size()); }
+  const VolumePlacement& placement() const { return placement_; }
+  // GPU time of the last render in milliseconds (0 without timestamps).
+  double last_gpu_ms() const { return last_gpu_ms_; }
 
  private:
   explicit Raycaster(gpu::Context& ctx) : ctx_(ctx) {}
   Status ensure_target(uint32_t width, uint32_t height);
-  Status upload_transfer(const RaycastSettings& settings);
 
   gpu::Context& ctx_;
-  gpu::ComputePipeline pipeline_;
+  gpu::ComputePipeline compute_;
+  gpu::ComputePipeline fragment_;
   gpu::Handle<VkDescriptorPool> pool_;
   VkDescriptorSet set_ = VK_NULL_HANDLE;
   gpu::Handle<VkSampler> linear_;
-  gpu::Image volume_tex_;
+  gpu::Handle<VkSampler> nearest_;
+  std::vector<gpu::Image> volume_tex_;
   gpu::Image transfer_tex_;
+  gpu::Image depth_tex_;
+  gpu::Image empty_depth_;
   gpu::Image target_;
+  gpu::Buffer params_;
   gpu::GpuTimer timer_;
   VolumePlacement placement_;
-  double value_scale_ = 255.0;  // data units per normalised texel unit
-  bool has_volume_ = false;
+  std::vector<double> value_scales_;  // data units per texel unit, per channel
+  bool has_depth_ = false;
+  double last_gpu_ms_ = 0.0;
 };
 
 // Premultiplied RGBA over an opaque black background (what PNG viewers show).

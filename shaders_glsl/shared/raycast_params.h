@@ -1,5 +1,6 @@
-// Push constants of raycast.comp, shared by GLSL and C++ (one layout, two languages).
-// Only vec4/uvec4 members: std430 and C++ agree on their offsets without padding rules.
+// Uniform block of the ray caster (raycast.comp, raycast.frag, and any shader
+// that includes include/raycast_core.glsl), shared by GLSL and C++.
+// Only vec4/uvec4 members: std140 and C++ agree on their offsets without padding rules.
 #ifndef VXR_RAYCAST_PARAMS_H
 #define VXR_RAYCAST_PARAMS_H
 
@@ -10,23 +11,49 @@ using vec4 = glm::vec4;
 using uvec4 = glm::uvec4;
 #endif
 
-// Optical models (params.model).
+// Optical models (control.x).
 #define VXR_MODEL_EMISSION_ABSORPTION 0
 #define VXR_MODEL_MIP 1
+#define VXR_MODEL_EMISSION 2
+#define VXR_MODEL_MINIP 3
+#define VXR_MODEL_AVERAGE 4
+#define VXR_MODEL_ISOSURFACE 5
+
+// How channels combine (control2.x).
+#define VXR_BLEND_ADDITIVE 0   // each channel is its own medium; images add
+#define VXR_BLEND_COMPOSITE 1  // channels mix into one medium at every sample
+
+// Depth-coded colour (depth.x): the colour coordinate is depth, not value.
+#define VXR_DEPTH_COLOR_OFF 0
+#define VXR_DEPTH_COLOR_VIEW 1  // distance along the view axis across the volume's box
+#define VXR_DEPTH_COLOR_AXIS_X 2
+#define VXR_DEPTH_COLOR_AXIS_Y 3
+#define VXR_DEPTH_COLOR_AXIS_Z 4
+
+#define VXR_MAX_CHANNELS 4
+#define VXR_TF_SIZE 256  // entries per channel in the transfer-function table, entry i at x = i / 255
 
 struct RaycastParams {
-  // Camera in voxel coordinates of the volume (voxel centres at i + 0.5).
-  vec4 eye;      // xyz: eye position
-  vec4 forward;  // xyz: direction through the image centre
-  vec4 right;    // xyz: +x of the image at unit distance (scaled by tan(fov/2) * aspect)
-  vec4 up;       // xyz: +y of the image at unit distance (scaled by tan(fov/2))
-  vec4 dims;     // xyz: volume size in voxels
-  vec4 shading;  // x: step (voxels), y: window lo, z: window hi (0..1 of the texel range), w: extinction per voxel at TF opacity 1
-  uvec4 control; // x: model, y: image width, z: image height, w: max steps
+  // Camera in voxel coordinates of the volume (voxel centres at i + 0.5, box [0, dims]).
+  vec4 eye;       // xyz: eye position
+  vec4 forward;   // xyz: direction through the image centre (unit length in world space, mapped to voxels)
+  vec4 right;     // xyz: +x of the image at unit distance (scaled by tan(fov/2) * aspect)
+  vec4 up;        // xyz: +y of the image at unit distance (scaled by tan(fov/2))
+  vec4 dims;      // xyz: volume size in voxels; w: channel count (1..4)
+  vec4 march;     // x: step (voxels), y: extinction per voxel at TF opacity 1,
+                  // z: early-termination epsilon (stop when transmittance <= eps),
+                  // w: sample offset within each segment (0..1), or < 0 for per-pixel jitter
+  vec4 iso;       // x: iso value (window-normalised 0..1), y: ambient, z: diffuse, w: specular
+  vec4 shading;   // x: shininess, y: depth image present (0/1), z,w: unused
+  vec4 depth;     // x: depth-colour mode, y: view-depth at the box's nearest corner, z: at its farthest, w: unused
+  vec4 gradient;  // x: gradient-magnitude opacity on (0/1), y: |g| where the factor starts rising, z: |g| where it reaches 1
+  uvec4 control;  // x: model, y: image width, z: image height, w: max steps per ray
+  uvec4 control2; // x: channel blend, y: index of the iso channel, z,w: unused
+  vec4 window[VXR_MAX_CHANNELS];  // per channel: x lo, y hi (texel units), z gamma, w enabled (0/1)
 };
 
 #ifdef __cplusplus
-static_assert(sizeof(RaycastParams) == 112, "push constants must stay within 128 bytes");
+static_assert(sizeof(RaycastParams) == 256, "std140 layout of RaycastParams changed: update both languages");
 }  // namespace vxr::shader
 #endif
 

@@ -61,7 +61,7 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
       if (Status s = (*caster)->set_volume(vol); !s) return cli::fail(s);
       const VolumePlacement placement{vol.dims, vol.voxel_size};
       const Camera cam = orbit_camera(placement, 30.0, 20.0, 1.3);
-      RaycastSettings rs;
+      RenderSettings rs;
       rs.model = OpticalModel::kMip;
       rs.step_voxels = 1.0;
       Status err;

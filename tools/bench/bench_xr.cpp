@@ -44,7 +44,7 @@ int run(const Options& o) {
   auto eyes = xr::EyeRenderer::create(**gpu, *volume);
   if (!eyes) return fail(eyes.status());
   const xr::VolumeTransform t = xr::default_volume_transform((*eyes)->placement());
-  const RaycastSettings settings = xr::default_view_settings();
+  const RenderSettings settings = xr::default_view_settings();
   const xr::Fov fov{-0.785398, 0.698132, 0.785398, -0.785398};  // a typical asymmetric left-eye fov
   const glm::dvec3 c = t.position;
   // Far (the head well inside the centre band), close and close-oblique (it fills the outer bands).

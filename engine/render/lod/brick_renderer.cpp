@@ -128,16 +128,16 @@ Status BrickRenderer::ensure_target(uint32_t width, uint32_t height) {
   return Status::ok();
 }
 
-Status BrickRenderer::upload_transfer(const RaycastSettings& s) {
-  if (s.colormap == tf_key_) return Status::ok();
-  auto cmap = find_colormap(s.colormap);
-  if (!cmap) return invalid_argument("unknown colormap '" + s.colormap + "'");
+Status BrickRenderer::upload_transfer(const RenderSettings& s) {
+  if (s.channels[0].colormap == tf_key_) return Status::ok();
+  auto cmap = find_colormap(s.channels[0].colormap);
+  if (!cmap) return invalid_argument("unknown colormap '" + s.channels[0].colormap + "'");
   std::vector<glm::vec4> table(256);
   for (int i = 0; i < 256; ++i) table[i] = glm::vec4((*cmap)[i], static_cast<float>(i) / 255.0f);
   VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, transfer_tex_, table.data(), table.size() * sizeof(glm::vec4)));
   for (VkDescriptorSet set : {paged_set_, mono_set_})
     gpu::write_combined_image(ctx_, set, 1, transfer_tex_.view, linear_);
-  tf_key_ = s.colormap;
+  tf_key_ = s.channels[0].colormap;
   return Status::ok();
 }
 
@@ -167,15 +167,15 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
   std::memcpy(out, &r, sizeof(r));
 }
 
-Result<double> BrickRenderer::cast(VkDescriptorSet set, const LodView& view, const RaycastSettings& s,
+Result<double> BrickRenderer::cast(VkDescriptorSet set, const LodView& view, const RenderSettings& s,
                                    uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
                                    const std::vector<glm::uvec2>& waves, BrickFrameStats* stats) {
   shader::BrickCastParams p{};
   p.forward = v4(view.forward);
   p.right = v4(view.right);
   p.up = v4(view.up);
-  p.shading = glm::vec4(static_cast<float>(s.step_voxels), static_cast<float>(s.window_lo / value_scale_),
-                        static_cast<float>(s.window_hi / value_scale_), static_cast<float>(s.density));
+  p.shading = glm::vec4(static_cast<float>(s.step_voxels), static_cast<float>(s.channels[0].window_lo / value_scale_),
+                        static_cast<float>(s.channels[0].window_hi / value_scale_), static_cast<float>(s.density));
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z, 0.0f);
   const uint32_t model = s.model == OpticalModel::kMip ? VXR_MODEL_MIP : VXR_MODEL_EMISSION_ABSORPTION;
   const uint32_t w = view.width, h = view.height;
@@ -348,13 +348,13 @@ Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const 
   return Status::ok();
 }
 
-Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RaycastSettings& s,
+Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSettings& s,
                                          const BrickFrameSettings& frame, uint32_t width, uint32_t height,
                                          BrickFrameStats* stats_out) {
   VXR_TRACE_SCOPE("brick_renderer.render");
   if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
   if (!(s.step_voxels > 0.0)) return invalid_argument("render: step must be > 0 voxels");
-  if (!(s.window_hi > s.window_lo)) return invalid_argument("render: window lo must be below hi");
+  if (!(s.channels[0].window_hi > s.channels[0].window_lo)) return invalid_argument("render: window lo must be below hi");
   VXR_RETURN_IF_ERROR(ensure_target(width, height));
   VXR_RETURN_IF_ERROR(upload_transfer(s));
   BrickFrameStats st;
@@ -363,7 +363,7 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RaycastSett
 
   auto t0 = std::chrono::steady_clock::now();
   LodQueries q;
-  const double lo = s.window_lo;
+  const double lo = s.channels[0].window_lo;
   q.visible = [lo](double, double hi) { return hi > lo; };  // the ramp is zero at and below the window's low end
   q.resident = [this](const ChunkKey& k) { return pool_->resident(k); };
   LodResult lod = traverse_lod(src_, view, frame.lod, q);
@@ -439,7 +439,7 @@ Status BrickRenderer::set_monolithic(uint32_t level) {
   return Status::ok();
 }
 
-Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const RaycastSettings& s,
+Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const RenderSettings& s,
                                                     const LodSettings& clip, uint32_t width, uint32_t height,
                                                     BrickFrameStats* stats_out) {
   VXR_TRACE_SCOPE("brick_renderer.render_monolithic");

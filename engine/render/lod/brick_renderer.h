@@ -72,13 +72,13 @@ class BrickRenderer {
 
   // Premultiplied RGBA, top row first. Complete every frame: missing bricks
   // are drawn from their nearest resident ancestor.
-  Result<ImageRgba8> render(const Camera& camera, const RaycastSettings& settings, const BrickFrameSettings& frame,
+  Result<ImageRgba8> render(const Camera& camera, const RenderSettings& settings, const BrickFrameSettings& frame,
                             uint32_t width, uint32_t height, BrickFrameStats* stats = nullptr);
 
   // Loads `level` of the source into one 3D texture (refused past the
   // device's 3D image limit) for render_monolithic().
   Status set_monolithic(uint32_t level);
-  Result<ImageRgba8> render_monolithic(const Camera& camera, const RaycastSettings& settings, const LodSettings& clip,
+  Result<ImageRgba8> render_monolithic(const Camera& camera, const RenderSettings& settings, const LodSettings& clip,
                                        uint32_t width, uint32_t height, BrickFrameStats* stats = nullptr);
 
   BrickPool& pool() { return *pool_; }
@@ -87,11 +87,11 @@ class BrickRenderer {
  private:
   BrickRenderer(gpu::Context& ctx, const ChunkSource& src) : ctx_(ctx), src_(src) {}
   Status ensure_target(uint32_t width, uint32_t height);
-  Status upload_transfer(const RaycastSettings& settings);
+  Status upload_transfer(const RenderSettings& settings);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in texels).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
                    const LodSettings& clip) const;
-  Result<double> cast(VkDescriptorSet set, const LodView& view, const RaycastSettings& s, uint32_t bricks,
+  Result<double> cast(VkDescriptorSet set, const LodView& view, const RenderSettings& s, uint32_t bricks,
                       const glm::uvec3& atlas_texels, BrickPassMode mode, const std::vector<glm::uvec2>& waves,
                       BrickFrameStats* stats);
   // Multipass work items (brick, 8x8 tile) grouped into waves; returns (first item, count) per wave.

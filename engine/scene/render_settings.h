@@ -1,0 +1,110 @@
+// The plain, serialisable render state: what `vxr render --settings` reads and
+// what cards store. No behaviour here: the renderer (engine/render) checks and
+// uses it; the JSON round-trip is lossless.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+
+namespace vxr {
+
+enum class OpticalModel { kEmissionAbsorption, kEmission, kMip, kMinIp, kAverage, kIsosurface };
+enum class ChannelBlend { kAdditive, kComposite };
+enum class DepthColorMode { kOff, kView, kAxisX, kAxisY, kAxisZ };
+
+// JSON/CLI names: "ea", "emission", "mip", "minip", "average", "iso".
+const char* optical_model_name(OpticalModel m);
+bool optical_model_from_name(const std::string& name, OpticalModel* out);
+
+struct ColorPoint {
+  double x = 0.0;                        // window-normalised position 0..1
+  std::array<double, 3> rgb{0, 0, 0};    // 0..1
+  bool operator==(const ColorPoint&) const = default;
+};
+struct OpacityPoint {
+  double x = 0.0;        // window-normalised position 0..1
+  double opacity = 0.0;  // 0..1, scales the extinction `density`
+  bool operator==(const OpacityPoint&) const = default;
+};
+
+// One channel's transfer function. Values are windowed (lo..hi in the data's
+// own units -> 0..1), raised to `gamma`, then looked up: colour from
+// `color_points` when given, else from `colormap`; opacity from
+// `opacity_points` when given, else equal to the normalised value.
+struct ChannelSettings {
+  bool enabled = true;
+  double window_lo = 0.0;
+  double window_hi = 255.0;
+  double gamma = 1.0;
+  std::string colormap = "gray";
+  std::vector<ColorPoint> color_points;
+  std::vector<OpacityPoint> opacity_points;
+  bool operator==(const ChannelSettings&) const = default;
+};
+
+struct ShadingSettings {  // isosurface shading (headlight)
+  double ambient = 0.25;
+  double diffuse = 0.75;
+  double specular = 0.25;
+  double shininess = 24.0;
+  bool operator==(const ShadingSettings&) const = default;
+};
+
+struct GradientOpacity {  // opacity *= ramp(|grad|) with |grad| in window units per voxel
+  bool enabled = false;
+  double lo = 0.0;
+  double hi = 0.1;
+  bool operator==(const GradientOpacity&) const = default;
+};
+
+struct RenderSettings {
+  OpticalModel model = OpticalModel::kEmissionAbsorption;
+  std::vector<ChannelSettings> channels{ChannelSettings{}};  // one per volume channel (up to 4)
+  ChannelBlend blend = ChannelBlend::kAdditive;
+  double step_voxels = 0.5;            // distance between samples, in voxels
+  double density = 0.25;               // extinction per voxel at opacity 1
+  double early_termination = 1.0 / 512.0;  // stop a ray once its transmittance is <= this
+  bool jitter = false;                 // deterministic per-pixel offset of the sample positions
+  // Where each sample sits inside its segment when not jittered: 0.5, the
+  // midpoint, converges at second order; 0, the segment start, is the classic
+  // first-order scheme.
+  double sample_offset = 0.5;
+  double iso_value = 128.0;            // isosurface threshold, data units of channel `iso_channel`
+  uint32_t iso_channel = 0;
+  ShadingSettings shading;
+  DepthColorMode depth_color = DepthColorMode::kOff;  // colour by depth through each channel's colour map
+  GradientOpacity gradient_opacity;
+  uint32_t max_steps = 1u << 16;
+  bool operator==(const RenderSettings&) const = default;
+};
+
+struct CameraState {
+  std::array<double, 3> eye{0, 0, 1};
+  std::array<double, 3> target{0, 0, 0};
+  std::array<double, 3> up{0, 1, 0};
+  double fov_y_deg = 40.0;
+  bool operator==(const CameraState&) const = default;
+};
+
+// What a card stores: where the camera is, how the volume is drawn.
+struct Scene {
+  std::string volume;  // path or name of the volume it shows
+  CameraState camera;
+  bool has_camera = false;  // false: the viewer picks a default view
+  RenderSettings render;
+  bool operator==(const Scene&) const = default;
+};
+
+// JSON text <-> structs. Missing keys keep their defaults; unknown keys are
+// ignored; wrong types, unknown enum names and malformed JSON give
+// kInvalidArgument naming the key.
+std::string render_settings_to_json(const RenderSettings& s);
+Result<RenderSettings> render_settings_from_json(const std::string& text);
+std::string scene_to_json(const Scene& s);
+Result<Scene> scene_from_json(const std::string& text);
+
+}  // namespace vxr

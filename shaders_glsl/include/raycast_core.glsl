@@ -1,0 +1,277 @@
+// The ray-casting core: slab test, classification (window, gamma, transfer
+// function, depth colour, gradient-magnitude opacity), and one compositing step
+// per optical model. Shared by raycast.comp and raycast.frag (whole volume in
+// one texture) and by brick-marching shaders: nothing here knows how the volume
+// is stored.
+//
+// The including shader defines, before or after including this file:
+//   vec4 vxr_sample(vec3 p);              raw values of channels 0..3 at voxel-space
+//                                         point p (voxel centres at i + 0.5; box [0, dims])
+//                                         in texel units (UNORM 0..1, or data units for float)
+//   vec4 vxr_transfer(int channel, float x);  transfer-function entry at x in 0..1:
+//                                         rgb the colour, a the opacity (extinction scale);
+//                                         vxr_transfer_table() below does it from a table texture
+//
+// Numerics (../shared/design/numerics.md): sample positions come from the step
+// index (never t += dt); opacity from accumulated optical depth, exp(-sum tau),
+// exact for any step; the slab test never makes NaN.
+#ifndef VXR_RAYCAST_CORE_GLSL
+#define VXR_RAYCAST_CORE_GLSL
+
+#include "shared/raycast_params.h"
+
+vec4 vxr_sample(vec3 p);
+vec4 vxr_transfer(int channel, float x);
+
+// Table lookup with the interpolation done here (texelFetch + mix), so the CPU
+// reference can repeat it exactly: entry i sits at x = i / (VXR_TF_SIZE - 1).
+// Row `channel` of `tf` (VXR_TF_SIZE x VXR_MAX_CHANNELS, RGBA32F).
+vec4 vxr_transfer_table(sampler2D tf, int channel, float x) {
+  float u = clamp(x, 0.0, 1.0) * float(VXR_TF_SIZE - 1);
+  int i = min(int(u), VXR_TF_SIZE - 2);
+  float f = u - float(i);
+  return mix(texelFetch(tf, ivec2(i, channel), 0), texelFetch(tf, ivec2(i + 1, channel), 0), f);
+}
+
+// Ray o + t d against the box [bmin, bmax]. Zero direction components are
+// replaced by +-1e-30 first, so no 0 * inf = NaN can appear: axis-parallel
+// rays and origins on a face behave. The exit is widened by pbrt's gamma(3).
+bool vxr_hit_box(vec3 o, vec3 d, vec3 bmin, vec3 bmax, out float t0, out float t1) {
+  vec3 safe = mix(d, mix(vec3(1e-30), vec3(-1e-30), lessThan(d, vec3(0.0))), lessThan(abs(d), vec3(1e-30)));
+  vec3 inv = 1.0 / safe;
+  vec3 ta = (bmin - o) * inv;
+  vec3 tb = (bmax - o) * inv;
+  vec3 tmin = min(ta, tb);
+  vec3 tmax = max(ta, tb);
+  t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
+  t1 = min(min(tmax.x, tmax.y), tmax.z);
+  t1 *= 1.0 + 6.0 * 5.96e-8;
+  return t1 > t0;
+}
+
+// 1 - exp(-tau), with the series for small tau so faint tissue survives float32.
+float vxr_opacity(float tau) { return tau < 1e-3 ? tau * (1.0 - 0.5 * tau) : 1.0 - exp(-tau); }
+
+// Window (lo..hi -> 0..1, clamped) then gamma, per channel.
+vec4 vxr_normalise(RaycastParams P, vec4 raw) {
+  vec4 x;
+  for (int c = 0; c < VXR_MAX_CHANNELS; ++c) {
+    vec4 w = P.window[c];
+    float v = clamp((raw[c] - w.x) / (w.y - w.x), 0.0, 1.0);
+    x[c] = w.z == 1.0 ? v : pow(v, w.z);
+  }
+  return x;
+}
+
+// Depth coordinate in 0..1 for depth-coded colour.
+float vxr_depth_coord(RaycastParams P, vec3 pos) {
+  int mode = int(P.depth.x);
+  if (mode == VXR_DEPTH_COLOR_VIEW) {
+    float d = dot(pos - P.eye.xyz, normalize(P.forward.xyz));
+    return clamp((d - P.depth.y) / (P.depth.z - P.depth.y), 0.0, 1.0);
+  }
+  int axis = mode - VXR_DEPTH_COLOR_AXIS_X;
+  return clamp(pos[axis] / P.dims[axis], 0.0, 1.0);
+}
+
+// Central differences of the normalised values over +-1 voxel: g{x,y,z}[c].
+void vxr_gradients(RaycastParams P, vec3 pos, out vec4 gx, out vec4 gy, out vec4 gz) {
+  gx = 0.5 * (vxr_normalise(P, vxr_sample(pos + vec3(1, 0, 0))) - vxr_normalise(P, vxr_sample(pos - vec3(1, 0, 0))));
+  gy = 0.5 * (vxr_normalise(P, vxr_sample(pos + vec3(0, 1, 0))) - vxr_normalise(P, vxr_sample(pos - vec3(0, 1, 0))));
+  gz = 0.5 * (vxr_normalise(P, vxr_sample(pos + vec3(0, 0, 1))) - vxr_normalise(P, vxr_sample(pos - vec3(0, 0, 1))));
+}
+
+// Everything a ray carries between steps (and between bricks).
+struct VxrRay {
+  vec4 acc[VXR_MAX_CHANNELS];  // colour accumulated per channel (composite blend: acc[0] only)
+  vec4 tau;                    // optical depth so far per channel (composite: .x)
+  vec4 reduce;                 // MIP max / MinIP min / average: integral of the normalised value
+  vec4 reduce_depth;           // depth coordinate where the max / min was found
+  float count;                 // length sampled (average) / samples taken
+  float prev_value;            // isosurface: previous value of the iso channel (< 0: none yet)
+  float prev_t;
+  float hit_t;                 // isosurface: ray parameter of the first crossing (< 0: none)
+  bool done;                   // early termination or surface found
+};
+
+VxrRay vxr_begin(RaycastParams P) {
+  VxrRay r;
+  for (int c = 0; c < VXR_MAX_CHANNELS; ++c) r.acc[c] = vec4(0.0);
+  r.tau = vec4(0.0);
+  r.reduce = P.control.x == VXR_MODEL_MINIP ? vec4(1.0) : vec4(0.0);
+  r.reduce_depth = vec4(0.0);
+  r.count = 0.0;
+  r.prev_value = -1.0;
+  r.prev_t = 0.0;
+  r.hit_t = -1.0;
+  r.done = false;
+  return r;
+}
+
+// One sample at ray parameter t covering a segment of length seg (voxels).
+void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, float seg) {
+  vec3 pos = eye + t * dir;
+  vec4 x = vxr_normalise(P, vxr_sample(pos));
+  int n = int(P.dims.w);
+  uint model = P.control.x;
+  bool depth_color = int(P.depth.x) != VXR_DEPTH_COLOR_OFF;
+
+  if (model == VXR_MODEL_MIP || model == VXR_MODEL_MINIP) {
+    float dc = depth_color ? vxr_depth_coord(P, pos) : 0.0;
+    for (int c = 0; c < n; ++c) {
+      bool better = model == VXR_MODEL_MIP ? x[c] > r.reduce[c] : x[c] < r.reduce[c];
+      if (better) {
+        r.reduce[c] = x[c];
+        r.reduce_depth[c] = dc;
+      }
+    }
+    r.count += 1.0;
+    return;
+  }
+  if (model == VXR_MODEL_AVERAGE) {
+    r.reduce += x * seg;
+    r.count += seg;
+    return;
+  }
+  if (model == VXR_MODEL_ISOSURFACE) {
+    float v = x[P.control2.y];
+    if (v >= P.iso.x) {
+      r.hit_t = r.prev_value < 0.0 ? t : r.prev_t + (P.iso.x - r.prev_value) / (v - r.prev_value) * (t - r.prev_t);
+      r.done = true;
+    }
+    r.prev_value = v;
+    r.prev_t = t;
+    return;
+  }
+
+  // Emission-only and emission-absorption.
+  vec4 gfac = vec4(1.0);
+  if (P.gradient.x != 0.0) {
+    vec4 gx, gy, gz;
+    vxr_gradients(P, pos, gx, gy, gz);
+    vec4 mag = sqrt(gx * gx + gy * gy + gz * gz);
+    gfac = clamp((mag - P.gradient.y) / (P.gradient.z - P.gradient.y), 0.0, 1.0);
+  }
+  float dc = depth_color ? vxr_depth_coord(P, pos) : 0.0;
+  float density = P.march.y;
+  vec3 mix_color = vec3(0.0);
+  float mix_tau = 0.0;
+  for (int c = 0; c < n; ++c) {
+    if (P.window[c].w == 0.0) continue;
+    vec4 tf = vxr_transfer(c, x[c]);
+    vec3 color = depth_color ? vxr_transfer(c, dc).rgb : tf.rgb;
+    float tau = tf.a * gfac[c] * density * seg;
+    if (model == VXR_MODEL_EMISSION) {
+      r.acc[c].rgb += color * tau;
+    } else if (P.control2.x == VXR_BLEND_ADDITIVE) {
+      r.acc[c].rgb += exp(-r.tau[c]) * vxr_opacity(tau) * color;
+      r.tau[c] += tau;
+    } else {
+      mix_color += tau * color;
+      mix_tau += tau;
+    }
+  }
+  if (model == VXR_MODEL_EMISSION) return;
+  if (P.control2.x == VXR_BLEND_COMPOSITE) {
+    // One medium: extinctions add, emission is the extinction-weighted colour.
+    if (mix_tau > 0.0) r.acc[0].rgb += exp(-r.tau.x) * vxr_opacity(mix_tau) * (mix_color / mix_tau);
+    r.tau.x += mix_tau;
+    r.done = exp(-r.tau.x) <= P.march.z;
+  } else {
+    float tmin = 1e30;
+    for (int c = 0; c < n; ++c)
+      if (P.window[c].w != 0.0) tmin = min(tmin, r.tau[c]);
+    r.done = exp(-tmin) <= P.march.z;  // every channel is (nearly) opaque
+  }
+}
+
+// Marches the samples of a ray whose segments are [t_origin + i*step, +step),
+// clipped to [t_lo, t_hi]; sample i sits `jitter` (0..1) into its clipped
+// segment. A brick marcher calls this per brick with the ray's own t_origin,
+// so sample positions do not depend on brick boundaries.
+void vxr_march(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t_origin, float t_lo, float t_hi,
+               float jitter) {
+  float step = P.march.x;
+  uint i = uint(max(floor((t_lo - t_origin) / step), 0.0));
+  uint i_end = min(uint(max(ceil((t_hi - t_origin) / step), 0.0)), P.control.w);
+  for (; i < i_end && !r.done; ++i) {
+    float a = max(t_origin + float(i) * step, t_lo);
+    float b = min(t_origin + float(i + 1u) * step, t_hi);
+    if (b <= a) continue;
+    vxr_step(r, P, eye, dir, a + jitter * (b - a), b - a);
+  }
+}
+
+// The ray's premultiplied RGBA. `dir` is the ray's unit direction (for shading).
+vec4 vxr_finish(VxrRay r, RaycastParams P, vec3 eye, vec3 dir) {
+  int n = int(P.dims.w);
+  uint model = P.control.x;
+  bool depth_color = int(P.depth.x) != VXR_DEPTH_COLOR_OFF;
+  if (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION) {
+    vec3 rgb = vec3(0.0);
+    float tau_sum = 0.0;
+    for (int c = 0; c < n; ++c) {
+      rgb += r.acc[c].rgb;
+      tau_sum += r.tau[c];
+    }
+    if (model == VXR_MODEL_EMISSION) return vec4(clamp(rgb, 0.0, 1.0), 0.0);
+    return vec4(clamp(rgb, 0.0, 1.0), vxr_opacity(tau_sum));
+  }
+  if (model == VXR_MODEL_ISOSURFACE) {
+    if (r.hit_t < 0.0) return vec4(0.0);
+    vec3 pos = eye + r.hit_t * dir;
+    int ic = int(P.control2.y);
+    vec4 gx, gy, gz;
+    vxr_gradients(P, pos, gx, gy, gz);
+    vec3 g = vec3(gx[ic], gy[ic], gz[ic]);
+    float ndl = dot(g, g) > 0.0 ? abs(dot(normalize(g), dir)) : 1.0;  // headlight
+    vec3 base = vxr_transfer(ic, depth_color ? vxr_depth_coord(P, pos) : P.iso.x).rgb;
+    vec3 rgb = base * (P.iso.y + P.iso.z * ndl) + vec3(P.iso.w * pow(ndl, P.shading.x));
+    return vec4(clamp(rgb, 0.0, 1.0), 1.0);
+  }
+  // MIP, MinIP, average: the reduced value through the transfer function.
+  if (r.count <= 0.0) return vec4(0.0);
+  vec3 rgb = vec3(0.0);
+  float transparency = 1.0;
+  for (int c = 0; c < n; ++c) {
+    if (P.window[c].w == 0.0) continue;
+    float v = model == VXR_MODEL_AVERAGE ? r.reduce[c] / r.count : r.reduce[c];
+    vec4 tf = vxr_transfer(c, v);
+    vec3 color = depth_color && model != VXR_MODEL_AVERAGE ? vxr_transfer(c, r.reduce_depth[c]).rgb : tf.rgb;
+    rgb += color * tf.a;
+    transparency *= 1.0 - tf.a;
+  }
+  return vec4(clamp(rgb, 0.0, 1.0), 1.0 - transparency);
+}
+
+// Deterministic per-pixel jitter in [0, 1) (a 32-bit integer hash; the CPU
+// reference repeats it bit for bit).
+float vxr_jitter(uvec2 pix) {
+  uint h = pix.x * 0x8da6b343u ^ pix.y * 0xd8163841u;
+  h ^= h >> 16;
+  h *= 0x7feb352du;
+  h ^= h >> 15;
+  h *= 0x846ca68bu;
+  h ^= h >> 16;
+  return float(h >> 8) * (1.0 / 16777216.0);
+}
+
+// The whole ray of pixel `pix` through the box [0, dims], ending at `t_limit`
+// (the depth image's distance, or +inf).
+vec4 vxr_cast(RaycastParams P, uvec2 pix, float depth_limit_view) {
+  vec2 ndc = (vec2(pix) + 0.5) / vec2(P.control.yz) * 2.0 - 1.0;
+  vec3 raw_dir = P.forward.xyz + ndc.x * P.right.xyz - ndc.y * P.up.xyz;
+  vec3 dir = normalize(raw_dir);
+  vec3 eye = P.eye.xyz;
+  float t0, t1;
+  if (!vxr_hit_box(eye, dir, vec3(0.0), P.dims.xyz, t0, t1)) return vec4(0.0);
+  // A view depth z is at ray parameter z * |raw_dir| (raw_dir has unit view depth).
+  if (P.shading.y != 0.0) t1 = min(t1, depth_limit_view * length(raw_dir));
+  if (!(t1 > t0)) return vec4(0.0);
+  float jitter = P.march.w < 0.0 ? vxr_jitter(pix) : P.march.w;
+  VxrRay r = vxr_begin(P);
+  vxr_march(r, P, eye, dir, t0, t0, t1, jitter);
+  return vxr_finish(r, P, eye, dir);
+}
+
+#endif
