@@ -5,6 +5,8 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <algorithm>
+#include <filesystem>
 #include <limits>
 
 #include "golden.h"
@@ -13,6 +15,7 @@
 #include "render/raycaster.h"
 #include "render/reference_renderer.h"
 #include "render_scenes.h"
+#include "volume/load_dense.h"
 
 using namespace vxr;
 
@@ -244,4 +247,47 @@ TEST_CASE("numerics: every colormap is a 256-entry table in 0..1 with the publis
   CHECK(find_colormap("inferno")->back().r == doctest::Approx(0.988362));
   CHECK(find_colormap("magenta")->back() == glm::dvec3(1, 0, 1));
   CHECK(!find_colormap("no-such-map").has_value());
+}
+
+// `vxr render`'s path from a file to a picture, over every volume in
+// ../shared/testdata that the importers read: each gives a non-blank MIP.
+TEST_CASE("render: every volume in testdata renders to a non-blank image") {
+  test::GpuTestScope scope;
+  namespace fs = std::filesystem;
+  const fs::path root = VXR_TESTDATA_DIR;
+  std::vector<std::string> inputs = {(root / "slices/mri-stack").string()};
+  for (const char* dir : {"tiff", "ome-tiff", "imaris"})
+    for (const auto& e : fs::directory_iterator(root / dir))
+      if (e.is_regular_file()) inputs.push_back(e.path().string());
+  std::sort(inputs.begin(), inputs.end());
+  auto caster = Raycaster::create(test::gpu_context());
+  REQUIRE(caster.is_ok());
+  int rendered = 0;
+  for (const std::string& in : inputs) {
+    auto loaded = load_for_render(in, 2048, uint64_t(1) << 30);
+    REQUIRE_MESSAGE(loaded.is_ok(), in << ": " << loaded.status().to_string());
+    RenderSettings s;
+    s.model = OpticalModel::kMip;
+    s.channels.clear();
+    for (const DenseVolume& v : loaded->channels) {
+      ChannelSettings ch;
+      double lo = 1e300, hi = -1e300;
+      for (uint32_t z = 0; z < v.dims[2]; ++z)
+        for (uint32_t y = 0; y < v.dims[1]; ++y)
+          for (uint32_t x = 0; x < v.dims[0]; ++x) lo = std::min(lo, v.value_at(x, y, z)), hi = std::max(hi, v.value_at(x, y, z));
+      ch.window_lo = lo;
+      ch.window_hi = hi > lo ? hi : lo + 1;
+      s.channels.push_back(ch);
+    }
+    REQUIRE((*caster)->set_channels(loaded->channels).is_ok());
+    const VolumePlacement p{loaded->channels[0].dims, loaded->channels[0].voxel_size};
+    const Camera cam = p.dims[2] == 1 ? orbit_camera(p, 0.0, 90.0 - 1e-3, 1.1) : orbit_camera(p, 30.0, 25.0, 1.25);
+    auto img = (*caster)->render(cam, s, 48, 48);
+    REQUIRE_MESSAGE(img.is_ok(), in << ": " << img.status().to_string());
+    INFO(in);
+    CHECK(test::looks_non_blank(over_black(*img)));
+    ++rendered;
+  }
+  MESSAGE(rendered << " testdata volumes rendered");
+  CHECK(rendered >= 20);
 }

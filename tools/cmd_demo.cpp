@@ -41,7 +41,7 @@ void add_demo_command(CLI::App& app, Invocation& inv) {
       views[1].channels[0].colormap = "viridis";
       views[2].model = OpticalModel::kIsosurface;
       views[2].iso_value = 60;
-      views[2].channels[0].colormap = "gray";
+      views[2].channels[0].color_points = {{0.0, {0.95, 0.8, 0.7}}, {1.0, {0.95, 0.8, 0.7}}};  // skin
       views[3].channels[0].colormap = "turbo";
       views[3].depth_color = DepthColorMode::kView;
       views[3].density = 0.2;

@@ -23,6 +23,8 @@ struct Invocation {
 
 void add_version_command(CLI::App& app, Invocation& inv);
 void add_demo_command(CLI::App& app, Invocation& inv);
+void add_render_command(CLI::App& app, Invocation& inv);
+void add_compare_command(CLI::App& app, Invocation& inv);
 void add_bench_command(CLI::App& app, Invocation& inv);
 void add_view_command(CLI::App& app, Invocation& inv);
 void add_import_command(CLI::App& app, Invocation& inv);

@@ -37,6 +37,8 @@ int main(int argc, char** argv) {
   Invocation inv;
   add_version_command(app, inv);
   add_demo_command(app, inv);
+  add_render_command(app, inv);
+  add_compare_command(app, inv);
   add_bench_command(app, inv);
   add_view_command(app, inv);
   add_import_command(app, inv);

@@ -81,6 +81,14 @@ Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const Ful
   stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
   stages[1].module = fs;
   stages[1].pName = "main";
+  std::vector<VkSpecializationMapEntry> entries;
+  std::vector<uint32_t> values;
+  for (const auto& sc : info.specialization) {
+    entries.push_back({sc.id, static_cast<uint32_t>(values.size() * 4), 4});
+    values.push_back(sc.value);
+  }
+  VkSpecializationInfo spec{static_cast<uint32_t>(entries.size()), entries.data(), values.size() * 4, values.data()};
+  stages[1].pSpecializationInfo = entries.empty() ? nullptr : &spec;
 
   VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
   VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};

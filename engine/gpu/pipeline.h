@@ -40,6 +40,7 @@ struct FullscreenPipelineCreateInfo {
   std::string_view fragment_shader;  // e.g. "raycast.frag"
   std::vector<VkDescriptorSetLayoutBinding> bindings;  // set 0
   VkFormat color_format = VK_FORMAT_R8G8B8A8_UNORM;
+  std::vector<SpecializationConstant> specialization;  // fragment stage
 };
 // Same members as a compute pipeline: set layout, layout, pipeline.
 Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const FullscreenPipelineCreateInfo& info);

@@ -62,11 +62,15 @@ ImageRgba8 to_rgba8(const ImageRgbaF& f) {
 Result<std::unique_ptr<Raycaster>> Raycaster::create(gpu::Context& ctx) {
   std::unique_ptr<Raycaster> r(new Raycaster(ctx));
   const auto bindings = raycast_bindings();
-  VXR_ASSIGN_OR_RETURN(r->compute_, gpu::create_compute_pipeline(ctx, {"raycast.comp", bindings, 0, {}}));
-  VXR_ASSIGN_OR_RETURN(r->fragment_, gpu::create_fullscreen_pipeline(ctx, {"fullscreen.vert", "raycast.frag", bindings,
-                                                                           VK_FORMAT_R32G32B32A32_SFLOAT}));
+  VkDescriptorSetLayoutCreateInfo dl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  dl.bindingCount = static_cast<uint32_t>(bindings.size());
+  dl.pBindings = bindings.data();
+  VkDescriptorSetLayout layout = VK_NULL_HANDLE;
+  if (vkCreateDescriptorSetLayout(ctx.device(), &dl, nullptr, &layout) != VK_SUCCESS)
+    return gpu_error("ray caster: vkCreateDescriptorSetLayout failed");
+  r->set_layout_ = gpu::Handle<VkDescriptorSetLayout>(ctx.device(), layout);
   VXR_ASSIGN_OR_RETURN(r->pool_, gpu::create_descriptor_pool(ctx, bindings, 1));
-  VXR_ASSIGN_OR_RETURN(r->set_, gpu::allocate_descriptor_set(ctx, r->pool_, r->compute_.set_layout));
+  VXR_ASSIGN_OR_RETURN(r->set_, gpu::allocate_descriptor_set(ctx, r->pool_, r->set_layout_));
   VXR_ASSIGN_OR_RETURN(r->linear_, gpu::create_linear_clamp_sampler(ctx));
   VXR_ASSIGN_OR_RETURN(r->nearest_, gpu::create_nearest_clamp_sampler(ctx));
   VXR_ASSIGN_OR_RETURN(r->timer_, gpu::GpuTimer::create(ctx));
@@ -88,6 +92,24 @@ Result<std::unique_ptr<Raycaster>> Raycaster::create(gpu::Context& ctx) {
   gpu::write_combined_image(ctx, r->set_, 1, r->transfer_tex_.view, r->nearest_);
   gpu::write_combined_image(ctx, r->set_, 3, r->empty_depth_.view, r->nearest_);
   return r;
+}
+
+Result<const gpu::ComputePipeline*> Raycaster::pipeline_for(RenderPath path, const RaycastSetup& r) {
+  const uint32_t model = pack_params(r, false).control.x;
+  const bool depth = r.depth_mode != DepthColorMode::kOff;
+  const uint32_t key = (path == RenderPath::kFragment ? 1u : 0u) | (model << 1) | (r.channels << 4) |
+                       (r.gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u);
+  if (auto it = pipelines_.find(key); it != pipelines_.end()) return &it->second;
+  const std::vector<gpu::SpecializationConstant> spec = {
+      {100, model}, {101, r.channels}, {102, r.gradient ? 1u : 0u}, {103, depth ? 1u : 0u}};
+  gpu::ComputePipeline p;
+  if (path == RenderPath::kCompute) {
+    VXR_ASSIGN_OR_RETURN(p, gpu::create_compute_pipeline(ctx_, {"raycast.comp", raycast_bindings(), 0, spec}));
+  } else {
+    VXR_ASSIGN_OR_RETURN(p, gpu::create_fullscreen_pipeline(ctx_, {"fullscreen.vert", "raycast.frag", raycast_bindings(),
+                                                                   VK_FORMAT_R32G32B32A32_SFLOAT, spec}));
+  }
+  return &pipelines_.emplace(key, std::move(p)).first->second;
 }
 
 Status Raycaster::set_volume(const DenseVolume& volume) { return set_channels(std::span(&volume, 1)); }
@@ -183,6 +205,7 @@ Result<ImageRgbaF> Raycaster::render_float(const Camera& camera, const RenderSet
   const RaycastSetup setup = plan_raycast(camera, s, placement_, value_scales_, width, height);
   const shader::RaycastParams p = pack_params(setup, has_depth_);
   std::memcpy(params_.mapped, &p, sizeof(p));
+  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(path, setup));
 
   const auto t_start = std::chrono::steady_clock::now();
   VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
@@ -190,8 +213,8 @@ Result<ImageRgbaF> Raycaster::render_float(const Camera& camera, const RenderSet
       gpu::transition_image(cmd, target_, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
                             VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
       timer_.begin(cmd, "gpu.raycast.compute");
-      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, compute_.pipeline);
-      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, compute_.layout, 0, 1, &set_, 0, nullptr);
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->pipeline);
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set_, 0, nullptr);
       vkCmdDispatch(cmd, (width + 7) / 8, (height + 7) / 8, 1);
       timer_.end(cmd);
     } else {
@@ -213,8 +236,8 @@ Result<ImageRgbaF> Raycaster::render_float(const Camera& camera, const RenderSet
       VkRect2D sc{{0, 0}, {width, height}};
       vkCmdSetViewport(cmd, 0, 1, &vp);
       vkCmdSetScissor(cmd, 0, 1, &sc);
-      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, fragment_.pipeline);
-      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, fragment_.layout, 0, 1, &set_, 0, nullptr);
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe->pipeline);
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe->layout, 0, 1, &set_, 0, nullptr);
       vkCmdDraw(cmd, 3, 1, 0, 0);
       vkCmdEndRendering(cmd);
       timer_.end(cmd);

@@ -8,6 +8,7 @@
 // reference. The renderer never opens files: callers hand it DenseVolumes.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <span>
 #include <string>
@@ -67,8 +68,11 @@ class Raycaster {
   Status ensure_target(uint32_t width, uint32_t height);
 
   gpu::Context& ctx_;
-  gpu::ComputePipeline compute_;
-  gpu::ComputePipeline fragment_;
+  // Pipelines per (path, model, channels, gradient, depth colour): the core's
+  // specialization constants. Built on first use.
+  Result<const gpu::ComputePipeline*> pipeline_for(RenderPath path, const struct RaycastSetup& setup);
+  std::map<uint32_t, gpu::ComputePipeline> pipelines_;
+  gpu::Handle<VkDescriptorSetLayout> set_layout_;
   gpu::Handle<VkDescriptorPool> pool_;
   VkDescriptorSet set_ = VK_NULL_HANDLE;
   gpu::Handle<VkSampler> linear_;

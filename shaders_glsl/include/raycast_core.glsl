@@ -23,6 +23,16 @@
 vec4 vxr_sample(vec3 p);
 vec4 vxr_transfer(int channel, float x);
 
+// Specialization constants (ids 100..103, clear of an includer's own): the
+// pipeline is built per model / channel count / feature set, so the dead
+// branches never reach the driver's compiler (lavapipe compiles the whole
+// shader with LLVM; the all-in-one variant is several times slower to build).
+// They must agree with the same fields of RaycastParams.
+layout(constant_id = 100) const uint VXR_SC_MODEL = 0;            // control.x
+layout(constant_id = 101) const int VXR_SC_CHANNELS = 1;          // dims.w
+layout(constant_id = 102) const bool VXR_SC_GRADIENT = false;     // gradient.x != 0
+layout(constant_id = 103) const bool VXR_SC_DEPTH_COLOR = false;  // depth.x != OFF
+
 // Table lookup with the interpolation done here (texelFetch + mix), so the CPU
 // reference can repeat it exactly: entry i sits at x = i / (VXR_TF_SIZE - 1).
 // Row `channel` of `tf` (VXR_TF_SIZE x VXR_MAX_CHANNELS, RGBA32F).
@@ -98,7 +108,10 @@ VxrRay vxr_begin(RaycastParams P) {
   VxrRay r;
   for (int c = 0; c < VXR_MAX_CHANNELS; ++c) r.acc[c] = vec4(0.0);
   r.tau = vec4(0.0);
-  r.reduce = P.control.x == VXR_MODEL_MINIP ? vec4(1.0) : vec4(0.0);
+  // A statement, not a ?: on spec constants: glslang folds that into an
+  // OpSpecConstantOp select, and on lavapipe 22.3 MinIP then started at 0.
+  r.reduce = vec4(0.0);
+  if (VXR_SC_MODEL == VXR_MODEL_MINIP) r.reduce = vec4(1.0);
   r.reduce_depth = vec4(0.0);
   r.count = 0.0;
   r.prev_value = -1.0;
@@ -112,9 +125,9 @@ VxrRay vxr_begin(RaycastParams P) {
 void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, float seg) {
   vec3 pos = eye + t * dir;
   vec4 x = vxr_normalise(P, vxr_sample(pos));
-  int n = int(P.dims.w);
-  uint model = P.control.x;
-  bool depth_color = int(P.depth.x) != VXR_DEPTH_COLOR_OFF;
+  const int n = VXR_SC_CHANNELS;
+  const uint model = VXR_SC_MODEL;
+  const bool depth_color = VXR_SC_DEPTH_COLOR;
 
   if (model == VXR_MODEL_MIP || model == VXR_MODEL_MINIP) {
     float dc = depth_color ? vxr_depth_coord(P, pos) : 0.0;
@@ -146,7 +159,7 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
 
   // Emission-only and emission-absorption.
   vec4 gfac = vec4(1.0);
-  if (P.gradient.x != 0.0) {
+  if (VXR_SC_GRADIENT) {
     vec4 gx, gy, gz;
     vxr_gradients(P, pos, gx, gy, gz);
     vec4 mag = sqrt(gx * gx + gy * gy + gz * gz);
@@ -204,9 +217,9 @@ void vxr_march(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t_orig
 
 // The ray's premultiplied RGBA. `dir` is the ray's unit direction (for shading).
 vec4 vxr_finish(VxrRay r, RaycastParams P, vec3 eye, vec3 dir) {
-  int n = int(P.dims.w);
-  uint model = P.control.x;
-  bool depth_color = int(P.depth.x) != VXR_DEPTH_COLOR_OFF;
+  const int n = VXR_SC_CHANNELS;
+  const uint model = VXR_SC_MODEL;
+  const bool depth_color = VXR_SC_DEPTH_COLOR;
   if (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION) {
     vec3 rgb = vec3(0.0);
     float tau_sum = 0.0;

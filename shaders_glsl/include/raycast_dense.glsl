@@ -15,7 +15,7 @@ vec4 vxr_sample(vec3 pos) {
   vec3 uvw = pos / p.dims.xyz;
   // Constant indices only: dynamic indexing of sampler arrays needs a feature.
   vec4 v = vec4(textureLod(volume_tex[0], uvw, 0.0).r, 0.0, 0.0, 0.0);
-  int n = int(p.dims.w);
+  const int n = VXR_SC_CHANNELS;
   if (n > 1) v.y = textureLod(volume_tex[1], uvw, 0.0).r;
   if (n > 2) v.z = textureLod(volume_tex[2], uvw, 0.0).r;
   if (n > 3) v.w = textureLod(volume_tex[3], uvw, 0.0).r;

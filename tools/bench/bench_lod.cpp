@@ -40,11 +40,11 @@ struct Case {
   ImageRgba8 image;
 };
 
-RaycastSettings vessel_settings() {
-  RaycastSettings s;
-  s.colormap = "hot";
-  s.window_lo = 8;  // above the background noise (0..6)
-  s.window_hi = 200;
+RenderSettings vessel_settings() {
+  RenderSettings s;
+  s.channels[0].colormap = "hot";
+  s.channels[0].window_lo = 8;  // above the background noise (0..6)
+  s.channels[0].window_hi = 200;
   s.step_voxels = 0.5;
   s.density = 0.3;
   return s;

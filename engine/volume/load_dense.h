@@ -1,0 +1,27 @@
+// Loading what `vxr render` draws: any importable input (raw+JSON sidecar,
+// TIFF, OME-TIFF, slice folders, Imaris, ...) as whole channels in memory,
+// shrunk by 2x box averaging until each fits the GPU's 3D texture limits.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+#include "volume/dense_volume.h"
+
+namespace vxr {
+
+struct LoadedVolume {
+  std::vector<DenseVolume> channels;  // timepoint 0, 1..4 channels
+  uint32_t shrink = 1;                // 1, 2, 4, ...: how much was averaged away to fit
+  std::string format;                 // what read it
+  std::vector<std::string> notes;     // warnings worth showing
+};
+
+// max_dim: the device's maxImageDimension3D; max_bytes: per-channel budget.
+Result<LoadedVolume> load_for_render(const std::string& path, uint32_t max_dim, uint64_t max_bytes);
+
+// 2x mean in every axis (odd edges keep their last voxel); same dtype.
+DenseVolume shrink_by_two(const DenseVolume& v);
+
+}  // namespace vxr
