@@ -9,7 +9,7 @@ glm::dvec3 VolumePlacement::extent() const {
 }
 
 glm::dvec3 VolumePlacement::world_to_voxel_point(const glm::dvec3& w) const {
-  return world_to_voxel_vector(w) + 0.5 * glm::dvec3(dims[0], dims[1], dims[2]);
+  return world_to_voxel_vector(w - origin) + 0.5 * glm::dvec3(dims[0], dims[1], dims[2]);
 }
 
 glm::dvec3 VolumePlacement::world_to_voxel_vector(const glm::dvec3& w) const {

@@ -28,11 +28,15 @@ struct Camera {
   std::optional<FrustumTangents> frustum;
 };
 
-// Where a volume sits in world space: voxel (i + 0.5) centres, origin at the
-// volume centre, scaled by voxel size.
+// Where a volume sits in world space: voxel (i + 0.5) centres, the box centre
+// at `origin`, scaled by voxel size.
 struct VolumePlacement {
   std::array<uint32_t, 3> dims{1, 1, 1};
   std::array<double, 3> voxel_size{1, 1, 1};
+  // World position of the box centre. Kept in double and subtracted before
+  // anything reaches the GPU, so a volume 2^24 voxels from the origin renders
+  // like one at the origin (../shared/design/numerics.md).
+  glm::dvec3 origin{0, 0, 0};
 
   glm::dvec3 extent() const;  // physical size of the whole box
   glm::dvec3 world_to_voxel_point(const glm::dvec3& w) const;

@@ -124,7 +124,7 @@ Status Raycaster::set_channels(std::span<const DenseVolume> channels) {
   for (const DenseVolume& v : channels) {
     if (v.dims != channels[0].dims)
       return invalid_argument("all channels must have the same dims");
-    if (v.data.size() != v.byte_size()) return invalid_argument("volume data size does not match its dims and dtype");
+    VXR_RETURN_IF_ERROR(check_renderable(v));
     VkFormat format = VK_FORMAT_R32_SFLOAT;
     double scale = 1.0;
     std::vector<float> converted;
@@ -144,7 +144,7 @@ Status Raycaster::set_channels(std::span<const DenseVolume> channels) {
       converted.resize(v.voxel_count());
       for (uint32_t z = 0, i = 0; z < v.dims[2]; ++z)
         for (uint32_t y = 0; y < v.dims[1]; ++y)
-          for (uint32_t x = 0; x < v.dims[0]; ++x) converted[i++] = static_cast<float>(v.value_at(x, y, z));
+          for (uint32_t x = 0; x < v.dims[0]; ++x) converted[i++] = static_cast<float>(renderable_value(v.value_at(x, y, z)));
       texels = converted.data();
       bytes = converted.size() * sizeof(float);
     }
@@ -158,7 +158,8 @@ Status Raycaster::set_channels(std::span<const DenseVolume> channels) {
   }
   volume_tex_ = std::move(textures);
   value_scales_ = std::move(scales);
-  placement_ = {channels[0].dims, channels[0].voxel_size};
+  placement_ = {channels[0].dims, channels[0].voxel_size,
+                {channels[0].origin[0], channels[0].origin[1], channels[0].origin[2]}};
   write_volume_array(ctx_, set_, volume_tex_, linear_);
   return Status::ok();
 }

@@ -194,14 +194,17 @@ class Tracer {
   }
 
   dvec4 cast(uint32_t px, uint32_t py) const {
-    const double ndx = (px + 0.5) / s_.width * 2.0 - 1.0, ndy = (py + 0.5) / s_.height * 2.0 - 1.0;
+    const double ndx = (2.0 * px + 1.0 - s_.width) / s_.width, ndy = (2.0 * py + 1.0 - s_.height) / s_.height;
     const dvec3 dir = glm::normalize(s_.rays.forward + ndx * s_.rays.right - ndy * s_.rays.up);
     const dvec3 eye = s_.rays.eye;
-    // Slab test with the axis-parallel case branched out.
+    // Slab test with the axis-parallel case branched out. A ray lying in a
+    // face plane belongs to the box when the plane is its low face and not
+    // when it is its high face ([0, dims) per axis, as the GPU's slab test
+    // decides it): neighbouring bricks then never both claim a ray.
     double t0 = 0.0, t1 = 1e300;
     for (int a = 0; a < 3; ++a) {
       if (dir[a] == 0.0) {
-        if (eye[a] < 0.0 || eye[a] > s_.dims[a]) return dvec4(0.0);
+        if (eye[a] < 0.0 || eye[a] >= s_.dims[a]) return dvec4(0.0);
         continue;
       }
       double ta = (0.0 - eye[a]) / dir[a], tb = (s_.dims[a] - eye[a]) / dir[a];
@@ -251,6 +254,7 @@ Result<ImageRgbaF> render_reference(std::span<const DenseVolume> channels, const
   for (size_t c = 0; c < channels.size(); ++c) {
     const DenseVolume& v = channels[c];
     if (v.dims != channels[0].dims) return invalid_argument("all channels must have the same dims");
+    VXR_RETURN_IF_ERROR(check_renderable(v));
     const double scale = v.dtype == DType::kU8 ? 255.0 : v.dtype == DType::kU16 ? 65535.0 : 1.0;
     scales.push_back(scale);
     auto& t = vols.texels[c];
@@ -258,9 +262,10 @@ Result<ImageRgbaF> render_reference(std::span<const DenseVolume> channels, const
     size_t i = 0;
     for (uint32_t z = 0; z < v.dims[2]; ++z)
       for (uint32_t y = 0; y < v.dims[1]; ++y)
-        for (uint32_t x = 0; x < v.dims[0]; ++x) t[i++] = v.value_at(x, y, z) / scale;
+        for (uint32_t x = 0; x < v.dims[0]; ++x) t[i++] = renderable_value(v.value_at(x, y, z)) / scale;
   }
-  const VolumePlacement placement{channels[0].dims, channels[0].voxel_size};
+  const VolumePlacement placement{channels[0].dims, channels[0].voxel_size,
+                                  {channels[0].origin[0], channels[0].origin[1], channels[0].origin[2]}};
   const RaycastSetup setup = plan_raycast(camera, settings, placement, scales, width, height);
   const TransferTable table = build_transfer_table(settings);
   const Tracer tracer(vols, setup, table, options.step_voxels);

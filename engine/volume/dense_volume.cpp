@@ -1,11 +1,26 @@
 #include "volume/dense_volume.h"
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 namespace vxr {
+
+Status check_renderable(const DenseVolume& v) {
+  if (v.dims[0] == 0 || v.dims[1] == 0 || v.dims[2] == 0)
+    return invalid_argument("volume is " + std::to_string(v.dims[0]) + "x" + std::to_string(v.dims[1]) + "x" +
+                            std::to_string(v.dims[2]) + " voxels: a zero side leaves nothing to render");
+  for (int a = 0; a < 3; ++a) {
+    if (!(v.voxel_size[a] > 0.0) || !std::isfinite(v.voxel_size[a]))
+      return invalid_argument("volume voxel_size[" + std::to_string(a) + "] is " + std::to_string(v.voxel_size[a]) +
+                              ": voxel sizes must be positive finite numbers");
+    if (!std::isfinite(v.origin[a])) return invalid_argument("volume origin must be finite");
+  }
+  if (v.data.size() != v.byte_size()) return invalid_argument("volume data size does not match its dims and dtype");
+  return Status::ok();
+}
 
 const char* dtype_name(DType t) {
   switch (t) {

@@ -18,6 +18,7 @@ struct DenseVolume {
   std::array<uint32_t, 3> dims{0, 0, 0};     // voxels along x, y, z
   DType dtype = DType::kU8;
   std::array<double, 3> voxel_size{1, 1, 1};  // physical size of one voxel
+  std::array<double, 3> origin{0, 0, 0};      // world position of the box centre (physical units)
   std::string unit = "um";
   std::vector<uint8_t> data;                  // dims[0]*dims[1]*dims[2]*dtype_bytes bytes
 
@@ -31,6 +32,18 @@ struct DenseVolume {
 //   {"file": "mri-stack.u8.raw", "dims": [186, 226, 27], "dtype": "u8",
 //    "voxel_size": [1, 1, 5], "unit": "um"}
 // "file" is relative to the sidecar. Sizes are checked against the file.
+// A voxel value as the renderers read it (GPU texture and CPU reference
+// alike): NaN reads as 0 and magnitudes are clamped to 1e30, so trilinear
+// filtering and windowing never meet inf - inf or 0 * inf.
+// Why a volume cannot be rendered (a zero side, a voxel size that is not a
+// positive finite number), or ok. Both renderers check it before anything else.
+Status check_renderable(const DenseVolume& v);
+
+inline double renderable_value(double v) {
+  if (v != v) return 0.0;
+  return v > 1e30 ? 1e30 : (v < -1e30 ? -1e30 : v);
+}
+
 Result<DenseVolume> load_raw_volume(const std::string& json_path);
 
 }  // namespace vxr

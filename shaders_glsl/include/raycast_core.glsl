@@ -272,7 +272,11 @@ float vxr_jitter(uvec2 pix) {
 // The whole ray of pixel `pix` through the box [0, dims], ending at `t_limit`
 // (the depth image's distance, or +inf).
 vec4 vxr_cast(RaycastParams P, uvec2 pix, float depth_limit_view) {
-  vec2 ndc = (vec2(pix) + 0.5) / vec2(P.control.yz) * 2.0 - 1.0;
+  // (2 pix + 1 - size) / size: the numerator is an exact integer, so the centre
+  // pixel of an odd-sized image gets ndc exactly 0 (an exactly axis-parallel
+  // ray where the camera is) even where the division is not correctly rounded.
+  vec2 size = vec2(P.control.yz);
+  vec2 ndc = (2.0 * vec2(pix) + 1.0 - size) / size;
   vec3 raw_dir = P.forward.xyz + ndc.x * P.right.xyz - ndc.y * P.up.xyz;
   vec3 dir = normalize(raw_dir);
   vec3 eye = P.eye.xyz;
