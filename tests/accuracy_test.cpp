@@ -8,6 +8,7 @@
 #include <set>
 
 #include "assets/assets.h"
+#include "bench/pareto.h"
 #include "bench/stability.h"
 #include "gpu_fixture.h"
 #include "render/raycaster.h"
@@ -263,4 +264,20 @@ TEST_CASE("accuracy: 1,000 seeded stress cases: no NaN/Inf, every error within i
   }
   CHECK(failures == 0);
   for (size_t k = 0; k < classes.size(); ++k) CHECK(per_class[k] >= 50);
+}
+
+TEST_CASE("accuracy: the Pareto front keeps exactly the undominated points and prices the default against it") {
+  using bench::TradeoffPoint;
+  //                                   0: fast, bad  1: dominated by 0  2: mid      3: slow, good  4: tie in time, worse
+  const std::vector<TradeoffPoint> p = {{1.0, 10.0}, {2.0, 12.0}, {3.0, 2.0}, {9.0, 0.5}, {3.0, 2.5}};
+  const auto front = bench::pareto_front(p);
+  REQUIRE(front.size() == 3);
+  CHECK(front[0] == 0);
+  CHECK(front[1] == 2);
+  CHECK(front[2] == 3);
+  // Point 4 (error 2.5) costs 3.0; the front reaches error <= 2.5 at time 3.0 (point 2): 0% over.
+  CHECK(bench::front_time_at_error(p, front, 2.5) == doctest::Approx(3.0));
+  // Point 1 (error 12) is matched by point 0 at time 1: it is 100% over the front.
+  CHECK(bench::front_time_at_error(p, front, 12.0) == doctest::Approx(1.0));
+  CHECK(std::isinf(bench::front_time_at_error(p, front, 0.1)));
 }

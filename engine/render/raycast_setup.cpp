@@ -25,6 +25,7 @@ RaycastSetup plan_raycast(const Camera& camera, const RenderSettings& s, const V
   r.step = s.step_voxels;
   r.density = s.density;
   r.epsilon = s.early_termination;
+  r.opacity_correction = s.opacity_correction;
   r.jitter = s.jitter;
   r.sample_offset = s.sample_offset;
   r.iso_channel = s.iso_channel;
@@ -77,7 +78,7 @@ shader::RaycastParams pack_params(const RaycastSetup& r, bool has_depth_image) {
   }
   p.control = glm::uvec4(model, r.width, r.height, r.max_steps);
   p.control2 = glm::uvec4(r.blend == ChannelBlend::kAdditive ? VXR_BLEND_ADDITIVE : VXR_BLEND_COMPOSITE,
-                          r.iso_channel, 0, 0);
+                          r.iso_channel, r.opacity_correction ? 0u : 1u, 0);
   for (int c = 0; c < VXR_MAX_CHANNELS; ++c) p.window[c] = glm::vec4(r.window[c]);
   return p;
 }

@@ -22,6 +22,7 @@ struct RaycastSetup {
   OpticalModel model = OpticalModel::kEmissionAbsorption;
   ChannelBlend blend = ChannelBlend::kAdditive;
   double step = 0.5, density = 0.25, epsilon = 1.0 / 512.0;
+  bool opacity_correction = true;
   bool jitter = false;
   double sample_offset = 0.5;
   double iso_norm = 0.5;  // the iso value, windowed and gamma'd like the samples

@@ -38,6 +38,7 @@ json to_j(const RenderSettings& s) {
           {"step_voxels", s.step_voxels},
           {"density", s.density},
           {"early_termination", s.early_termination},
+          {"opacity_correction", s.opacity_correction},
           {"jitter", s.jitter},
           {"sample_offset", s.sample_offset},
           {"iso_value", s.iso_value},
@@ -103,6 +104,7 @@ void from_j(const json& j, RenderSettings& s) {
   get(j, "step_voxels", s.step_voxels);
   get(j, "density", s.density);
   get(j, "early_termination", s.early_termination);
+  get(j, "opacity_correction", s.opacity_correction);
   get(j, "jitter", s.jitter);
   get(j, "sample_offset", s.sample_offset);
   get(j, "iso_value", s.iso_value);

@@ -68,6 +68,11 @@ struct RenderSettings {
   double step_voxels = 0.5;            // distance between samples, in voxels
   double density = 0.25;               // extinction per voxel at opacity 1
   double early_termination = 1.0 / 512.0;  // stop a ray once its transmittance is <= this
+  // Exact opacity from extinction, 1 - exp(-tau * step) (true), or the naive
+  // linear correction a = tau * step clamped to 1 (false). The naive form exists
+  // to measure what the exact one buys (vxr bench accuracy); the CPU reference
+  // always integrates exactly.
+  bool opacity_correction = true;
   bool jitter = false;                 // deterministic per-pixel offset of the sample positions
   // Where each sample sits inside its segment when not jittered: 0.5, the
   // midpoint, converges at second order; 0, the segment start, is the classic

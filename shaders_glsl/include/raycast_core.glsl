@@ -62,6 +62,14 @@ bool vxr_hit_box(vec3 o, vec3 d, vec3 bmin, vec3 bmax, out float t0, out float t
 // 1 - exp(-tau), with the series for small tau so faint tissue survives float32.
 float vxr_opacity(float tau) { return tau < 1e-3 ? tau * (1.0 - 0.5 * tau) : 1.0 - exp(-tau); }
 
+// The naive linear opacity correction (settings.opacity_correction = false):
+// a segment's opacity is its optical depth, clamped to 1. Returned as the
+// optical depth with that opacity, so the compositing below is unchanged.
+// Only `vxr bench accuracy` uses it, to show what the exact form buys.
+float vxr_segment_depth(RaycastParams P, float tau) {
+  return P.control2.z == 0u ? tau : -log(max(1.0 - min(tau, 1.0), 1e-30));
+}
+
 // Window (lo..hi -> 0..1, clamped) then gamma, per channel.
 vec4 vxr_normalise(RaycastParams P, vec4 raw) {
   vec4 x;
@@ -177,6 +185,7 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
     if (model == VXR_MODEL_EMISSION) {
       r.acc[c].rgb += color * tau;
     } else if (P.control2.x == VXR_BLEND_ADDITIVE) {
+      tau = vxr_segment_depth(P, tau);
       r.acc[c].rgb += exp(-r.tau[c]) * vxr_opacity(tau) * color;
       r.tau[c] += tau;
     } else {
@@ -187,8 +196,9 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
   if (model == VXR_MODEL_EMISSION) return;
   if (P.control2.x == VXR_BLEND_COMPOSITE) {
     // One medium: extinctions add, emission is the extinction-weighted colour.
-    if (mix_tau > 0.0) r.acc[0].rgb += exp(-r.tau.x) * vxr_opacity(mix_tau) * (mix_color / mix_tau);
-    r.tau.x += mix_tau;
+    const float seg_tau = vxr_segment_depth(P, mix_tau);
+    if (mix_tau > 0.0) r.acc[0].rgb += exp(-r.tau.x) * vxr_opacity(seg_tau) * (mix_color / mix_tau);
+    r.tau.x += seg_tau;
     r.done = exp(-r.tau.x) <= P.march.z;
   } else {
     float tmin = 1e30;

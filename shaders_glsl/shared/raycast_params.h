@@ -48,7 +48,7 @@ struct RaycastParams {
   vec4 depth;     // x: depth-colour mode, y: view-depth at the box's nearest corner, z: at its farthest, w: unused
   vec4 gradient;  // x: gradient-magnitude opacity on (0/1), y: |g| where the factor starts rising, z: |g| where it reaches 1
   uvec4 control;  // x: model, y: image width, z: image height, w: max steps per ray
-  uvec4 control2; // x: channel blend, y: index of the iso channel, z,w: unused
+  uvec4 control2; // x: channel blend, y: index of the iso channel, z: naive linear opacity (1) or exact (0), w: unused
   vec4 window[VXR_MAX_CHANNELS];  // per channel: x lo, y hi (texel units), z gamma, w enabled (0/1)
 };
 

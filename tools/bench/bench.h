@@ -41,5 +41,6 @@ void add_xr_bench(CLI::App& bench, cli::Invocation& inv);
 void add_lod_bench(CLI::App& bench, cli::Invocation& inv);
 void add_import_bench(CLI::App& bench, cli::Invocation& inv);
 void add_stability_bench(CLI::App& bench, cli::Invocation& inv);
+void add_accuracy_bench(CLI::App& bench, cli::Invocation& inv);
 
 }  // namespace vxr::bench
