@@ -9,6 +9,7 @@
 
 #include "assets/assets.h"
 #include "command.h"
+#include "volume/load_dense.h"
 #include "volume/importers/import_source.h"
 #include "xr/headless/headless_target.h"
 #include "xr/target_factory.h"
@@ -61,9 +62,14 @@ Result<DenseVolume> import_whole(const std::string& path) {
 Result<DenseVolume> load_input(const Options& o) {
   if (o.sample || o.input.empty()) return assets::sample_volume();
   const std::string ext = std::filesystem::path(o.input).extension().string();
-  if (ext == ".vxc")
-    return unsupported(o.input + ": .vxc containers are not readable by `vxr view` yet; pass a dataset vxr can "
-                                 "import (TIFF, OME-TIFF, Imaris, slice folder, raw + JSON sidecar) or --sample");
+  if (ext == ".vxc") {  // the finest pyramid level that the whole-volume caster can hold
+    VXR_ASSIGN_OR_RETURN(LoadedVolume loaded, load_for_render(o.input, 1024, uint64_t(1) << 30));
+    for (const std::string& n : loaded.notes) std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
+    if (loaded.channels[0].dtype != DType::kU8 && loaded.channels[0].dtype != DType::kU16)
+      return unsupported(o.input + ": vxr view shows u8 or u16 data, this is " +
+                         dtype_name(loaded.channels[0].dtype));
+    return std::move(loaded.channels[0]);
+  }
   return import_whole(o.input);
 }
 

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 
+#include "volume/container_reader.h"
 #include "volume/importers/import_source.h"
 
 namespace vxr {
@@ -57,10 +58,28 @@ DenseVolume shrink_by_two(const DenseVolume& v) {
   return out;
 }
 
+// A .vxc: the finest pyramid level that fits, read chunk by chunk (no shrinking in memory).
+static Result<LoadedVolume> load_container_level(const std::string& path, uint32_t max_dim, uint64_t max_bytes) {
+  VXR_ASSIGN_OR_RETURN(std::unique_ptr<ContainerReader> reader, ContainerReader::open(path));
+  const VolumeInfo& info = reader->info();
+  LoadedVolume out;
+  out.format = "vxc container";
+  const uint32_t level = finest_level_that_fits(*reader, max_dim, max_bytes);
+  const auto& lv = reader->levels()[level];
+  out.shrink = std::max({lv.downsample[0], lv.downsample[1], lv.downsample[2]});
+  const uint32_t channels = std::min<uint32_t>(info.channels, 4);
+  if (info.channels > 4) out.notes.push_back("showing the first 4 of " + std::to_string(info.channels) + " channels");
+  if (info.timepoints > 1) out.notes.push_back("showing timepoint 0 of " + std::to_string(info.timepoints));
+  for (uint32_t c = 0; c < channels; ++c) {
+    VXR_ASSIGN_OR_RETURN(DenseVolume v, read_level_dense(*reader, level, c, 0, max_bytes));
+    out.channels.push_back(std::move(v));
+  }
+  if (level > 0) out.notes.push_back("drawing pyramid level " + std::to_string(level) + " to fit the GPU's limits");
+  return out;
+}
+
 Result<LoadedVolume> load_for_render(const std::string& path, uint32_t max_dim, uint64_t max_bytes) {
-  if (std::filesystem::path(path).extension() == ".vxc")
-    return unsupported(path + ": reading .vxc containers is not in this build yet; render the source files "
-                              "(TIFF, OME-TIFF, slices, .ims, raw+JSON) directly");
+  if (std::filesystem::path(path).extension() == ".vxc") return load_container_level(path, max_dim, max_bytes);
   VXR_ASSIGN_OR_RETURN(std::unique_ptr<SlabSource> src, open_import_source({path}));
   const VolumeInfo& info = src->info();
   LoadedVolume out;
