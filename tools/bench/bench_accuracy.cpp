@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <optional>
 
 #include "assets/assets.h"
 #include "bench.h"
@@ -21,9 +22,13 @@
 #include "bench/plot.h"
 #include "bench/roofline.h"
 #include "core/image.h"
+#include "render/lod/brick_renderer.h"
 #include "render/raycaster.h"
 #include "render/reference_renderer.h"
-#include "volume/importers/import_source.h"
+#include "volume/container_reader.h"
+#include "volume/load_dense.h"
+#include "volume/memory_slab_source.h"
+#include "volume/pyramid_builder.h"
 #include "xr/lens_warp.h"
 
 namespace vxr::bench {
@@ -33,6 +38,9 @@ struct Dataset {
   std::string name;
   DenseVolume volume;
   RenderSettings base;  // window for this dataset
+  // The same voxels as a .vxc pyramid, drawn by the out-of-core renderer.
+  std::unique_ptr<ContainerReader> container;
+  std::unique_ptr<BrickRenderer> bricks;
 };
 
 struct View {
@@ -46,6 +54,7 @@ struct Variant {
   RenderSettings settings;
   RenderPath path = RenderPath::kCompute;
   xr::LensWarp warp;
+  std::optional<double> lod_bias;  // set: the out-of-core brick renderer at this LOD bias
   bool is_default = false;
 };
 
@@ -57,19 +66,16 @@ struct SceneResult {
   uint64_t samples = 0;  // without early termination, from the slab test (for the roofline ratio)
 };
 
-Result<DenseVolume> load_dense(const std::string& path) {
-  VXR_ASSIGN_OR_RETURN(auto src, open_import_source({path}));
-  const VolumeInfo& info = src->info();
-  DenseVolume v;
-  for (int a = 0; a < 3; ++a) v.dims[a] = static_cast<uint32_t>(info.dims[a]);
-  v.dtype = info.dtype;
-  v.voxel_size = info.voxel_size;
-  v.unit = info.unit;
-  v.data.resize(v.byte_size());
-  Box3 box;
-  box.size = info.dims;
-  VXR_RETURN_IF_ERROR(src->read_region(0, 0, box, v.data));
-  return v;
+// Converts `v` into a .vxc (32^3 chunks, mean pyramid) at `path` and opens a
+// brick renderer on it: the out-of-core path over the same voxels.
+Status attach_container(gpu::Context& ctx, Dataset& ds, const std::string& path) {
+  MemorySlabSource slabs(ds.volume);
+  ImportOptions io;
+  io.chunk_size = 32;
+  VXR_RETURN_IF_ERROR(build_container(slabs, path, io).status());
+  VXR_ASSIGN_OR_RETURN(ds.container, ContainerReader::open(path));
+  VXR_ASSIGN_OR_RETURN(ds.bricks, BrickRenderer::create(ctx, *ds.container));
+  return Status::ok();
 }
 
 // Camera with a symmetric frustum equal to its fov (the lens-warped path needs one).
@@ -161,6 +167,14 @@ std::vector<Variant> make_variants(bool quick) {
     v.name = "fragment, step " + label(st);
     out.push_back(v);
   }
+  for (double bias : quick ? std::vector<double>{0.0} : std::vector<double>{-1.0, 0.0, 1.0, 2.0}) {
+    Variant v;
+    v.settings = defaults;
+    v.lod_bias = bias;
+    v.family = "out-of-core LOD bias (brick renderer)";
+    v.name = "lod bias " + label(bias);
+    out.push_back(v);
+  }
   for (uint32_t ps : quick ? std::vector<uint32_t>{2} : std::vector<uint32_t>{2, 3, 4}) {
     Variant v;
     v.settings = defaults;
@@ -191,13 +205,22 @@ int run(const Options& o) {
     if (!mri) return cli::fail(mri.status());
     datasets.push_back({"mri (assets, 186x226x27 u8)", std::move(mri).value(), RenderSettings{}});
     const std::string mask = o.testdata + "/tiff/mri-stack-calibrated.tif";
-    auto m = load_dense(mask);
+    auto m = load_for_render(mask, ctx.limits().maxImageDimension3D, uint64_t(1) << 30);
     if (m) {
       RenderSettings s;
       s.density = 0.05;  // a binary mask is all-or-nothing: thinner so the inside shows
-      datasets.push_back({"mri mask (testdata tiff, 186x226x27 u8)", std::move(m).value(), s});
+      datasets.push_back({"mri mask (testdata tiff, 186x226x27 u8)", std::move(m->channels[0]), s});
     } else {
       std::fprintf(stderr, "accuracy: skipping %s: %s\n", mask.c_str(), m.status().to_string().c_str());
+    }
+  }
+  {
+    std::error_code ec;
+    std::filesystem::create_directories(o.common.out_dir, ec);
+    for (size_t di = 0; di < datasets.size(); ++di) {
+      const std::string path =
+          (std::filesystem::path(o.common.out_dir) / ("accuracy-dataset-" + std::to_string(di) + ".vxc")).string();
+      if (Status s = attach_container(ctx, datasets[di], path); !s) return cli::fail(s);
     }
   }
   const std::vector<View> views = {{"front-left", 30.0, 20.0, 1.3}, {"back-low", 160.0, -35.0, 1.5},
@@ -237,6 +260,20 @@ int run(const Options& o) {
         RenderSettings s = v.settings;
         s.channels = ds.base.channels;
         s.density = ds.base.density;
+        if (v.lod_bias) {
+          // Converged frames only: the first render of a view uploads its bricks.
+          BrickFrameSettings f;
+          f.lod.lod_bias = *v.lod_bias;
+          BrickFrameStats st;
+          for (int i = 0;; ++i) {
+            VXR_ASSIGN_OR_RETURN(ImageRgba8 img, ds.bricks->render(cam, s, f, w, h, &st));
+            if (st.lod.missing == 0) {
+              if (out) *out = from_rgba8(img);
+              return Status::ok();
+            }
+            if (i > 100) return internal_error("bench accuracy: the LOD view did not converge in 100 frames");
+          }
+        }
         if (v.warp.enabled) {
           VXR_ASSIGN_OR_RETURN(ImageRgba8 img, xr::render_lens_warped(caster, cam, s, w, h, v.warp));
           if (out) *out = from_rgba8(img);
@@ -293,6 +330,7 @@ int run(const Options& o) {
                       {"opacity_correction", s.opacity_correction},
                       {"path", variants[k].path == RenderPath::kCompute ? "compute" : "fragment"},
                       {"lens_warp_periphery_step", variants[k].warp.enabled ? variants[k].warp.periphery_step : 1},
+                      {"lod_bias", variants[k].lod_bias ? nlohmann::json(*variants[k].lod_bias) : nlohmann::json()},
                       {"default", variants[k].is_default},
                       {"ms", ms},
                       {"ms_per_frame", ms / scenes},

@@ -33,6 +33,9 @@ void add_stability_bench(CLI::App& bench, cli::Invocation& inv) {
       struct Tally {
         uint32_t cases = 0, failures = 0;
         double worst = 0.0;
+        double worst_ratio = 0.0;  // max-abs / case bound, uncapped cases
+        uint32_t capped = 0;
+        double worst_over_fraction_capped = 0.0;
       };
       std::vector<Tally> tally(classes.size());
       nlohmann::json failures = nlohmann::json::array();
@@ -46,6 +49,11 @@ void add_stability_bench(CLI::App& bench, cli::Invocation& inv) {
         Tally& t = tally[c.class_index];
         ++t.cases;
         t.worst = std::max(t.worst, o.max_abs);
+        if (!o.capped && o.bound > 0) t.worst_ratio = std::max(t.worst_ratio, o.max_abs / o.bound);
+        if (o.capped) {
+          ++t.capped;
+          t.worst_over_fraction_capped = std::max(t.worst_over_fraction_capped, o.over_fraction);
+        }
         if (o.non_finite) ++non_finite;
         if (!o.passed) {
           ++t.failures;
@@ -70,8 +78,11 @@ void add_stability_bench(CLI::App& bench, cli::Invocation& inv) {
                                 {"failures", tally[i].failures},
                                 {"worst_error", tally[i].worst},
                                 {"worst_error_255", tally[i].worst * 255.0},
-                                {"bound", classes[i].bound},
-                                {"bound_255", classes[i].bound * 255.0},
+                                {"worst_error_over_bound", tally[i].worst_ratio},
+                                {"capped", tally[i].capped},
+                                {"worst_over_fraction_capped", tally[i].worst_over_fraction_capped},
+                                {"class_bound", classes[i].bound},
+                                {"class_bound_255", classes[i].bound * 255.0},
                                 {"why", classes[i].why}};
       nlohmann::json doc = {
           {"seed", *seed},
