@@ -419,15 +419,19 @@ double case_bound(const StabilityCase& c) {
   if (c.volume.dtype == DType::kU8 || c.volume.dtype == DType::kU16) {
     w = dtype_max(c.volume.dtype) / width;
   } else {
-    // Float textures filter in float: weights off by ~1e-6 of the largest
-    // magnitude a voxel holds (1e30 after renderable_value for +-Inf).
-    double biggest = 0.0;
+    // Float textures: lavapipe filters them in float, but GPUs filter with
+    // fixed-point weights (NVIDIA: 8 fractional bits) as they do for
+    // integers, so the value error scales with the spread of the texel values
+    // (+-Inf read as +-1e30) just as the dtype range does above.
+    double lo = 0.0, hi = 0.0;
     for (uint64_t i = 0; i < c.volume.voxel_count(); ++i) {
       float f;
       std::memcpy(&f, &c.volume.data[i * 4], 4);
-      biggest = std::max(biggest, std::abs(renderable_value(f)));
+      const double v = renderable_value(f);
+      lo = i ? std::min(lo, v) : v;
+      hi = i ? std::max(hi, v) : v;
     }
-    w = 1e-6 * biggest / width / kBase;
+    w = (hi - lo) / width;
   }
   // Steepest control-point segment (opacity and colour).
   double t = 1.0;
