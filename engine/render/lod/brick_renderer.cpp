@@ -61,6 +61,29 @@ std::string format_stats(const BrickFrameStats& s) {
   return buf;
 }
 
+Status check_brick_settings(const RenderSettings& s) {
+  auto no = [](const std::string& what) {
+    return invalid_argument("render settings: " + what +
+                            " is not drawn by the out-of-core renderer (one channel, ea or mip, window and colormap); "
+                            "use the dense renderer (vxr render --renderer dense)");
+  };
+  if (s.model != OpticalModel::kEmissionAbsorption && s.model != OpticalModel::kMip)
+    return no(std::string("model '") + optical_model_name(s.model) + "'");
+  if (s.channels.empty()) return invalid_argument("render settings: no channel settings");
+  const ChannelSettings& c = s.channels[0];
+  if (!c.color_points.empty()) return no("'color_points'");
+  if (!c.opacity_points.empty()) return no("'opacity_points'");
+  if (c.gamma != 1.0) return no("'gamma' " + std::to_string(c.gamma));
+  if (s.gradient_opacity.enabled) return no("'gradient_opacity'");
+  if (s.depth_color != DepthColorMode::kOff) return no("'depth_color'");
+  if (s.jitter) return no("'jitter'");
+  if (s.sample_offset != 0.5) return no("'sample_offset' " + std::to_string(s.sample_offset));
+  if (!s.opacity_correction) return no("'opacity_correction' false");
+  for (size_t i = 1; i < s.channels.size(); ++i)
+    if (s.channels[i].enabled) return no("a second channel");
+  return Status::ok();
+}
+
 Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, const ChunkSource& source,
                                                              const BrickRendererOptions& options) {
   std::unique_ptr<BrickRenderer> r(new BrickRenderer(ctx, source));
@@ -354,6 +377,7 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
   VXR_TRACE_SCOPE("brick_renderer.render");
   if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
   if (!(s.step_voxels > 0.0)) return invalid_argument("render: step must be > 0 voxels");
+  VXR_RETURN_IF_ERROR(check_brick_settings(s));
   if (!(s.channels[0].window_hi > s.channels[0].window_lo)) return invalid_argument("render: window lo must be below hi");
   VXR_RETURN_IF_ERROR(ensure_target(width, height));
   VXR_RETURN_IF_ERROR(upload_transfer(s));

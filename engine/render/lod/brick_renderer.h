@@ -62,6 +62,12 @@ struct BrickFrameStats {
   double render_ms = 0.0;        // ray-cast submission, wall clock
 };
 
+// The brick shader draws one channel with emission-absorption or MIP, a
+// window and a colour map (opacity = the windowed value), at a fixed sample
+// offset of 0.5. Anything else in `s` would be silently ignored, so it is
+// refused: kInvalidArgument naming the setting.
+Status check_brick_settings(const RenderSettings& s);
+
 // "visited 123 drawn 45 (fallback 2) empty 30 culled 12 missing 3 samples 1.2M uploaded 0.4 MiB hit 97%"
 std::string format_stats(const BrickFrameStats& s);
 
