@@ -40,6 +40,7 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv);
 void add_xr_bench(CLI::App& bench, cli::Invocation& inv);
 void add_lod_bench(CLI::App& bench, cli::Invocation& inv);
 void add_import_bench(CLI::App& bench, cli::Invocation& inv);
+void add_synth_tiff_bench(CLI::App& bench, cli::Invocation& inv);
 void add_stability_bench(CLI::App& bench, cli::Invocation& inv);
 void add_accuracy_bench(CLI::App& bench, cli::Invocation& inv);
 

@@ -4,26 +4,27 @@
 //
 // Data: the given inputs (any format open_import_source reads), else the
 // bundled MRI sample; `--synthetic N` instead makes an N^3 u16 volume that
-// looks like noisy fluorescence microscopy (smooth blobs + Poisson-like noise
-// on a dark background). Reports, in out/bench/import.json: import MB/s
+// looks like noisy fluorescence microscopy (volume/synthetic_microscopy.h). Reports, in out/bench/import.json: import MB/s
 // (level-0 bytes / wall time, pyramid and file writing included, median of
 // --repeats), and for LZ4 and byte-shuffle + LZ4 on chunk-sized blocks of
 // the level-0 data: compression and decompression MB/s and ratios.
 #include <lz4.h>
 
+#include <array>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <random>
 
 #include "assets/assets.h"
 #include "bench.h"
+#include "core/progress.h"
 #include "volume/chunk_codec.h"
 #include "volume/container_reader.h"
 #include "volume/importers/import_source.h"
 #include "volume/memory_slab_source.h"
 #include "volume/pyramid_builder.h"
+#include "volume/synthetic_microscopy.h"
+#include "volume/tiff_writer.h"
 
 namespace vxr::bench {
 using cli::fail;
@@ -37,34 +38,6 @@ struct Options {
   uint32_t chunk = 64;
   std::string memory = "512M";
 };
-
-std::unique_ptr<SlabSource> synthetic_u16(uint32_t n) {
-  VolumeInfo info;
-  info.dims = {n, n, n};
-  info.dtype = DType::kU16;
-  std::vector<uint8_t> buf(info.voxels_per_volume() * 2);
-  std::mt19937 rng(1234);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  struct Blob {
-    double x, y, z, r, a;
-  };
-  std::vector<Blob> blobs;
-  for (int i = 0; i < 40; ++i) blobs.push_back({u(rng) * n, u(rng) * n, u(rng) * n, 3 + u(rng) * n / 10, 500 + u(rng) * 3000});
-  std::normal_distribution<double> noise(0.0, 1.0);
-  for (uint32_t z = 0; z < n; ++z)
-    for (uint32_t y = 0; y < n; ++y)
-      for (uint32_t x = 0; x < n; ++x) {
-        double s = 100;  // camera offset
-        for (const Blob& b : blobs) {
-          const double d2 = (x - b.x) * (x - b.x) + (y - b.y) * (y - b.y) + (z - b.z) * (z - b.z);
-          if (d2 < 9 * b.r * b.r) s += b.a * std::exp(-d2 / (2 * b.r * b.r));
-        }
-        const double v = std::max(0.0, s + std::sqrt(s) * noise(rng));  // shot noise
-        const uint16_t q = static_cast<uint16_t>(std::min(65535.0, v));
-        std::memcpy(buf.data() + ((uint64_t(z) * n + y) * n + x) * 2, &q, 2);
-      }
-  return std::make_unique<MemorySlabSource>(info, std::vector<std::vector<uint8_t>>{std::move(buf)});
-}
 
 struct CodecFigures {
   double compress_mb_s = 0, decompress_mb_s = 0, ratio = 0;
@@ -124,7 +97,7 @@ int run(const Options& o) {
   std::unique_ptr<SlabSource> source;
   std::string data_name;
   if (o.synthetic) {
-    source = synthetic_u16(o.synthetic);
+    source = std::make_unique<SyntheticMicroscopySource>(std::array<uint64_t, 3>{o.synthetic, o.synthetic, o.synthetic});
     data_name = "synthetic noisy u16 microscopy " + std::to_string(o.synthetic) + "^3";
   } else if (!o.inputs.empty()) {
     auto s = open_import_source(o.inputs);
@@ -209,7 +182,78 @@ int run(const Options& o) {
   return kExitOk;
 }
 
+struct SynthTiffOptions {
+  std::string dims = "1024,1024,1100";
+  std::string output;
+  bool slices = false;
+  uint64_t seed = 1234;
+};
+
+// Writes the synthetic microscopy volume as a TIFF: one multi-page file, or a
+// folder of single-page slices (slice_00000.tif, ...). Input for
+// tools/measure-import-memory.sh; streams plane by plane.
+int run_synth_tiff(const SynthTiffOptions& o) {
+  std::array<uint64_t, 3> dims{};
+  if (std::sscanf(o.dims.c_str(), "%llu,%llu,%llu", reinterpret_cast<unsigned long long*>(&dims[0]),
+                  reinterpret_cast<unsigned long long*>(&dims[1]), reinterpret_cast<unsigned long long*>(&dims[2])) != 3 ||
+      dims[0] == 0 || dims[1] == 0 || dims[2] == 0 || dims[0] > 65535 || dims[1] > 65535 || dims[2] > 1000000)
+    return fail(invalid_argument("--dims '" + o.dims + "': give x,y,z, e.g. 1024,1024,1100 (x, y at most 65535)"),
+                cli::kExitUsage);
+  SyntheticMicroscopySource source(dims, o.seed);
+  VolumeInfo page_info = source.info();
+  const uint64_t plane_bytes = dims[0] * dims[1] * 2;
+  std::vector<uint8_t> plane(plane_bytes);
+  Progress progress("synth-tiff", plane_bytes * dims[2]);
+  std::unique_ptr<TiffStackWriter> stack;
+  std::error_code ec;
+  if (o.slices) {
+    std::filesystem::create_directories(o.output, ec);
+    if (ec) return fail(io_error(o.output + ": cannot create the folder (" + ec.message() + ")"));
+    page_info.dims[2] = 1;
+  } else {
+    auto w = TiffStackWriter::create(o.output, page_info);
+    if (!w) return fail(w.status());
+    stack = std::move(*w);
+  }
+  for (uint64_t z = 0; z < dims[2]; ++z) {
+    Box3 box;
+    box.origin = {0, 0, z};
+    box.size = {dims[0], dims[1], 1};
+    if (Status s = source.read_region(0, 0, box, plane); !s) return fail(s);
+    if (stack) {
+      if (Status s = stack->write_page(plane.data()); !s) return fail(s);
+    } else {
+      char name[32];
+      std::snprintf(name, sizeof name, "slice_%05llu.tif", static_cast<unsigned long long>(z));
+      auto w = TiffStackWriter::create((std::filesystem::path(o.output) / name).string(), page_info);
+      if (!w) return fail(w.status());
+      if (Status s = (*w)->write_page(plane.data()); !s) return fail(s);
+      if (Status s = (*w)->finish(); !s) return fail(s);
+    }
+    progress.advance(plane_bytes);
+  }
+  if (stack)
+    if (Status s = stack->finish(); !s) return fail(s);
+  progress.finish();
+  std::printf("%s: %llux%llux%llu u16 synthetic microscopy (%zu cells), %.2f GiB%s\n", o.output.c_str(),
+              static_cast<unsigned long long>(dims[0]), static_cast<unsigned long long>(dims[1]),
+              static_cast<unsigned long long>(dims[2]), source.blob_count(),
+              double(plane_bytes * dims[2]) / double(uint64_t(1) << 30), o.slices ? " in single-page slices" : "");
+  return kExitOk;
+}
+
 }  // namespace
+
+void add_synth_tiff_bench(CLI::App& bench, cli::Invocation& inv) {
+  auto o = std::make_shared<SynthTiffOptions>();
+  auto* cmd = bench.add_subcommand("synth-tiff", "write the synthetic u16 microscopy volume as a TIFF stack (input "
+                                                 "for import benchmarks; tools/measure-import-memory.sh)");
+  cmd->add_option("--dims", o->dims, "x,y,z voxels (default 1024,1024,1100: 2.15 GiB)");
+  cmd->add_option("-o,--output", o->output, "output .tif (or folder with --slices)")->required();
+  cmd->add_flag("--slices", o->slices, "write a folder of single-page TIFF slices instead of one multi-page file");
+  cmd->add_option("--seed", o->seed, "random seed (default 1234)");
+  cmd->callback([&inv, o] { inv.run = [o] { return run_synth_tiff(*o); }; });
+}
 
 void add_import_bench(CLI::App& bench, cli::Invocation& inv) {
   auto o = std::make_shared<Options>();
