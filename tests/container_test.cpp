@@ -231,8 +231,8 @@ TEST_CASE("container: uniform chunks are stored without payload and read back as
   auto r = ContainerReader::open(out);
   REQUIRE(r.is_ok());
   int uniform = 0;
-  for (const auto& e : (*r)->entries())
-    if (e.codec == uint8_t(vxc::Codec::kUniform)) {
+  for (uint64_t i = 0; i < (*r)->chunk_count(); ++i)
+    if (const vxc::IndexEntry e = (*r)->entry_at(i).value(); e.codec == uint8_t(vxc::Codec::kUniform)) {
       CHECK(e.stored_size == 0);
       CHECK(e.min == -7);
       ++uniform;
@@ -296,7 +296,7 @@ TEST_CASE("corruption: a flipped byte in a chunk payload is found by verify and 
   {
     auto r = ContainerReader::open(out);
     REQUIRE(r.is_ok());
-    victim = (*r)->entries()[3];
+    victim = (*r)->entry_at(3).value();
     REQUIRE(victim.stored_size > 100);
   }
   flip_byte(out, victim.offset + sizeof(vxc::RecordHeader) + victim.stored_size / 2);
@@ -308,7 +308,7 @@ TEST_CASE("corruption: a flipped byte in a chunk payload is found by verify and 
   REQUIRE(r.is_ok());
   auto c = (*r)->read(key_of(victim));
   CHECK(c.status().code() == ErrorCode::kCorrupt);
-  CHECK((*r)->read(key_of((*r)->entries()[4])).is_ok());  // the rest stays readable
+  CHECK((*r)->read(key_of((*r)->entry_at(4).value())).is_ok());  // the rest stays readable
 }
 
 TEST_CASE("corruption: a flipped byte in a chunk record header is found and reading that chunk fails") {
@@ -317,7 +317,7 @@ TEST_CASE("corruption: a flipped byte in a chunk record header is found and read
   {
     auto r = ContainerReader::open(out);
     REQUIRE(r.is_ok());
-    victim = (*r)->entries()[5];
+    victim = (*r)->entry_at(5).value();
   }
   flip_byte(out, victim.offset + 50);  // inside stored_size
   const VerifyReport rep = verify_container(out);
@@ -347,6 +347,127 @@ TEST_CASE("corruption: a flipped byte in the index or the footer is found; the f
     CHECK(any_problem_mentions(rep, std::string(where) == "file header" ? "header" : where));
     auto r = ContainerReader::open(out);
     CHECK(r.status().code() == ErrorCode::kCorrupt);
+  }
+}
+
+namespace {
+
+// Rewrites index entry `i` of a finished file with `edit` applied, then fixes
+// the index and footer checksums, so only the entry's own checks can catch it.
+template <typename Edit>
+void rewrite_index_entry(const std::string& path, uint64_t i, Edit edit, bool fix_checksums = true) {
+  const uint64_t size = fs::file_size(path);
+  std::fstream io(path, std::ios::in | std::ios::out | std::ios::binary);
+  vxc::Footer f;
+  io.seekg(static_cast<std::streamoff>(size - sizeof f));
+  io.read(reinterpret_cast<char*>(&f), sizeof f);
+  std::vector<char> index(f.index_bytes);
+  io.seekg(static_cast<std::streamoff>(f.index_offset));
+  io.read(index.data(), static_cast<std::streamsize>(index.size()));
+  vxc::IndexEntry e;
+  char* at = index.data() + sizeof(vxc::IndexHeader) + i * sizeof e;
+  std::memcpy(&e, at, sizeof e);
+  edit(e);
+  std::memcpy(at, &e, sizeof e);
+  io.seekp(static_cast<std::streamoff>(f.index_offset));
+  io.write(index.data(), static_cast<std::streamsize>(index.size()));
+  if (fix_checksums) {
+    f.index_checksum = vxc::checksum(index.data(), index.size());
+    f.footer_checksum = vxc::checksum(&f, 48);
+    io.seekp(static_cast<std::streamoff>(size - sizeof f));
+    io.write(reinterpret_cast<const char*>(&f), sizeof f);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("index: a wrong entry with valid checksums is caught at open or when its chunk is read") {
+  // Entry 7 names another chunk: open() checks every entry's key against its position.
+  {
+    const std::string out = build_for_corruption(test_dir("index_wrong_key"));
+    rewrite_index_entry(out, 7, [](vxc::IndexEntry& e) { e.x ^= 1; });
+    auto r = ContainerReader::open(out);
+    CHECK(r.status().code() == ErrorCode::kCorrupt);
+    CHECK(r.status().message().find("index entry 7 is invalid") != std::string::npos);
+    const VerifyReport rep = verify_container(out);
+    CHECK_FALSE(rep.ok());
+    CHECK(any_problem_mentions(rep, "index: entry 7 names"));
+  }
+  // Entry 5 points at entry 6's (intact) record: the record names another chunk.
+  {
+    const std::string out = build_for_corruption(test_dir("index_wrong_offset"));
+    vxc::IndexEntry e5, e6;
+    {
+      auto r = ContainerReader::open(out);
+      REQUIRE(r.is_ok());
+      e5 = (*r)->entry_at(5).value();
+      e6 = (*r)->entry_at(6).value();
+    }
+    REQUIRE(e5.offset != e6.offset);
+    rewrite_index_entry(out, 5, [&](vxc::IndexEntry& e) { e.offset = e6.offset; });
+    auto r = ContainerReader::open(out);
+    REQUIRE(r.is_ok());
+    CHECK((*r)->read(key_of(e5)).status().code() == ErrorCode::kCorrupt);
+    CHECK((*r)->read(key_of(e6)).is_ok());
+    const VerifyReport rep = verify_container(out);
+    CHECK_FALSE(rep.ok());
+    CHECK(any_problem_mentions(rep, describe_key(key_of(e5))));
+  }
+  // The file changes under an open reader: the lookup itself checks the entry.
+  {
+    const std::string out = build_for_corruption(test_dir("index_changed_after_open"));
+    const vxc::IndexEntry e9 = ContainerReader::open(out).value()->entry_at(9).value();
+    auto r = ContainerReader::open(out);
+    REQUIRE(r.is_ok());
+    REQUIRE((*r)->resident_index_bytes() == 0);  // nothing cached yet
+    rewrite_index_entry(out, 9, [](vxc::IndexEntry& e) { e.y ^= 1; }, false);
+    CHECK((*r)->stats(key_of(e9)).status().code() == ErrorCode::kCorrupt);
+    CHECK((*r)->read(key_of(e9)).status().code() == ErrorCode::kCorrupt);
+  }
+}
+
+TEST_CASE("index: the reader holds a bounded index cache, not the index, whatever the chunk count") {
+  // 256^3 u8 in 8^3 chunks: 37449 chunks, a 3 MB index; and a 24^3 one with 36 chunks.
+  uint64_t resident_small = 0;
+  for (const uint64_t n : {uint64_t(24), uint64_t(256)}) {
+    CAPTURE(n);
+    VolumeInfo info;
+    info.dims = {n, n, n};
+    std::vector<uint8_t> buf(n * n * n, 3);
+    buf[((n - 1) * n + 5) * n + 2] = 200;  // one marked voxel: chunk (0, 5/8, (n-1)/8) of level 0
+    MemorySlabSource src(info, {buf});
+    ImportOptions opt;
+    opt.chunk_size = 8;
+    const std::string out = (test_dir("index_resident_" + std::to_string(n)) / "r.vxc").string();
+    REQUIRE(build_container(src, out, opt).is_ok());
+    auto r = ContainerReader::open(out);
+    REQUIRE(r.is_ok());
+    const ContainerReader& reader = **r;
+    CHECK(reader.resident_index_bytes() == 0);  // open() streamed the index, kept none of it
+    uint64_t marked = 0, lookups = 0;
+    for (uint32_t l = 0; l < reader.levels().size(); ++l) {
+      const auto& c = reader.levels()[l].chunk_counts;
+      for (uint32_t z = 0; z < c[2]; ++z)
+        for (uint32_t y = 0; y < c[1]; ++y)
+          for (uint32_t x = 0; x < c[0]; ++x) {
+            auto st = reader.stats({l, x, y, z, 0, 0});
+            REQUIRE(st.is_ok());
+            ++lookups;
+            if (l == 0 && st->max == 200) ++marked;
+            if (l == 0) CHECK(st->min == 3);
+          }
+    }
+    CHECK(lookups == reader.chunk_count());
+    CHECK(marked == 1);  // the marked voxel is interior: one level-0 chunk, not in anyone's apron
+    CHECK(reader.stats({0, 2 / 8, 5 / 8, uint32_t((n - 1) / 8), 0, 0})->max == 200);
+    CHECK(reader.resident_index_bytes() <= ContainerReader::kIndexCacheBytes);
+    if (n == 24) {
+      resident_small = reader.resident_index_bytes();
+      CHECK(resident_small == reader.chunk_count() * sizeof(vxc::IndexEntry));  // a small index fits the cache
+    } else {
+      CHECK(reader.chunk_count() * sizeof(vxc::IndexEntry) > 4 * ContainerReader::kIndexCacheBytes);
+      CHECK(reader.resident_index_bytes() < reader.chunk_count() * sizeof(vxc::IndexEntry) / 4);
+    }
   }
 }
 

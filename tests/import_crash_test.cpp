@@ -59,8 +59,10 @@ std::map<std::tuple<uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t>,
   auto r = ContainerReader::open(path);
   REQUIRE_MESSAGE(r.is_ok(), r.status().to_string());
   std::map<std::tuple<uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t>, ChunkFacts> m;
-  for (const auto& e : (*r)->entries())
+  for (uint64_t i = 0; i < (*r)->chunk_count(); ++i) {
+    const vxc::IndexEntry e = (*r)->entry_at(i).value();
     m[{e.level, e.timepoint, e.channel, e.z, e.y, e.x}] = {e.codec, e.stored_size, e.payload_checksum, e.min, e.max};
+  }
   return m;
 }
 
@@ -179,8 +181,8 @@ TEST_CASE("corruption: `vxr verify` exits 1 and names the damage for a flipped b
   {
     auto r = ContainerReader::open(clean);
     REQUIRE(r.is_ok());
-    for (const auto& e : (*r)->entries())
-      if (e.stored_size > 64) victim = e;
+    for (uint64_t i = 0; i < (*r)->chunk_count(); ++i)
+      if (const vxc::IndexEntry e = (*r)->entry_at(i).value(); e.stored_size > 64) victim = e;
     std::ifstream in(clean, std::ios::binary);
     in.seekg(static_cast<std::streamoff>(F - sizeof f));
     in.read(reinterpret_cast<char*>(&f), sizeof f);

@@ -20,8 +20,7 @@ void add_info_command(CLI::App& app, Invocation& inv) {
       const ContainerReader& r = **reader;
       const VolumeInfo& i = r.info();
       const auto& L = r.layout();
-      uint64_t uniform = 0;
-      for (const auto& e : r.entries()) uniform += e.codec == static_cast<uint8_t>(vxc::Codec::kUniform);
+      const uint64_t uniform = r.uniform_chunks();
       const char* codec_names[] = {"raw", "lz4", "shuffle-lz4", "uniform"};
       if (*json) {
         nlohmann::json j;
@@ -32,7 +31,7 @@ void add_info_command(CLI::App& app, Invocation& inv) {
         j["voxel_size"] = {i.voxel_size[0], i.voxel_size[1], i.voxel_size[2]};
         j["unit"] = i.unit;
         j["levels"] = r.levels().size();
-        j["chunks"] = r.entries().size();
+        j["chunks"] = r.chunk_count();
         j["compression_ratio"] = r.compression_ratio();
         j["chunk_size"] = r.chunk_size();
         j["apron"] = r.apron();
@@ -55,7 +54,7 @@ void add_info_command(CLI::App& app, Invocation& inv) {
       std::printf("dtype:       %s\n", dtype_name(i.dtype));
       std::printf("channels:    %u\ntimepoints:  %u\n", i.channels, i.timepoints);
       std::printf("voxel size:  %g x %g x %g %s\n", i.voxel_size[0], i.voxel_size[1], i.voxel_size[2], i.unit.c_str());
-      std::printf("chunks:      %zu of %u^3 (+%u apron), %llu uniform, codec %s\n", r.entries().size(), r.chunk_size(),
+      std::printf("chunks:      %llu of %u^3 (+%u apron), %llu uniform, codec %s\n", (unsigned long long)r.chunk_count(), r.chunk_size(),
                   r.apron(), (unsigned long long)uniform, codec_names[static_cast<int>(L.codec)]);
       std::printf("compression: %.2f : 1\n", r.compression_ratio());
       std::printf("levels:      %zu (%s downsampling)\n", r.levels().size(),

@@ -6,6 +6,9 @@
 
 #include <cerrno>
 #include <cstring>
+#include <vector>
+
+#include <xxhash.h>
 
 #include "volume/chunk_codec.h"
 
@@ -181,6 +184,27 @@ Result<std::shared_ptr<const Chunk>> read_chunk_record(const ContainerFile& file
   if (Status s = decode_payload(codec, chunk->dtype, chunk->stats, stored, chunk->data); !s)
     return corrupt(what + ": " + s.message());
   return std::shared_ptr<const Chunk>(std::move(chunk));
+}
+
+Result<IndexScan> scan_index(const ContainerFile& file, uint64_t index_offset, uint64_t count,
+                             const std::function<void(uint64_t, const vxc::IndexEntry&)>& visit) {
+  IndexScan scan;
+  std::unique_ptr<XXH64_state_t, decltype(&XXH64_freeState)> state(XXH64_createState(), &XXH64_freeState);
+  if (!state) return internal_error(file.path() + ": out of memory hashing the index");
+  XXH64_reset(state.get(), 0);
+  VXR_RETURN_IF_ERROR(file.read_at(&scan.header, sizeof scan.header, index_offset));
+  XXH64_update(state.get(), &scan.header, sizeof scan.header);
+  constexpr uint64_t kBlockEntries = (uint64_t(1) << 20) / sizeof(vxc::IndexEntry);
+  std::vector<vxc::IndexEntry> block(std::min(count, kBlockEntries));
+  for (uint64_t i = 0; i < count; i += kBlockEntries) {
+    const uint64_t n = std::min(kBlockEntries, count - i);
+    const uint64_t bytes = n * sizeof(vxc::IndexEntry);
+    VXR_RETURN_IF_ERROR(file.read_at(block.data(), bytes, index_offset + sizeof scan.header + i * sizeof(vxc::IndexEntry)));
+    XXH64_update(state.get(), block.data(), bytes);
+    for (uint64_t j = 0; j < n; ++j) visit(i + j, block[j]);
+  }
+  scan.checksum = XXH64_digest(state.get());
+  return scan;
 }
 
 }  // namespace vxr

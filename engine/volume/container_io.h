@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -50,6 +51,18 @@ ChunkKey key_of(const vxc::IndexEntry& e);
 // agrees with the entry and the payload checksum, and decodes the payload.
 Result<std::shared_ptr<const Chunk>> read_chunk_record(const ContainerFile& file, const ContainerLayout& layout,
                                                        const vxc::IndexEntry& entry, uint64_t limit);
+
+// Reads the index region (IndexHeader, then `count` IndexEntry records, at
+// `index_offset`) in blocks of at most 1 MiB, calling visit(i, entry) for
+// every entry in file order, so even a multi-GB index is checked in bounded
+// memory. Returns the index header and the XXH64 of the whole region (what
+// the footer's index_checksum covers); I/O errors only: the caller judges.
+struct IndexScan {
+  vxc::IndexHeader header{};
+  uint64_t checksum = 0;
+};
+Result<IndexScan> scan_index(const ContainerFile& file, uint64_t index_offset, uint64_t count,
+                             const std::function<void(uint64_t, const vxc::IndexEntry&)>& visit);
 
 // "level 0 chunk (1,2,3) channel 0 timepoint 0"
 std::string describe_key(const ChunkKey& k);

@@ -23,6 +23,30 @@ bool ContainerLayout::contains(const ChunkKey& k) const {
   return k.x < c[0] && k.y < c[1] && k.z < c[2];
 }
 
+uint64_t ContainerLayout::index_position(const ChunkKey& k) const {
+  uint64_t base = 0;
+  for (uint32_t l = 0; l < k.level; ++l) base += chunks_in_level(l);
+  base *= uint64_t(info.channels) * info.timepoints;
+  const auto& c = levels[k.level].chunk_counts;
+  return base + (((uint64_t(k.timepoint) * info.channels + k.channel) * c[2] + k.z) * c[1] + k.y) * c[0] + k.x;
+}
+
+ChunkKey ContainerLayout::key_at(uint64_t position) const {
+  ChunkKey k;
+  const uint64_t per = uint64_t(info.channels) * info.timepoints;
+  while (k.level + 1 < levels.size() && position >= chunks_in_level(k.level) * per) position -= chunks_in_level(k.level++) * per;
+  const auto& c = levels[k.level].chunk_counts;
+  k.x = uint32_t(position % c[0]);
+  position /= c[0];
+  k.y = uint32_t(position % c[1]);
+  position /= c[1];
+  k.z = uint32_t(position % c[2]);
+  position /= c[2];
+  k.channel = uint32_t(position % info.channels);
+  k.timepoint = uint32_t(position / info.channels);
+  return k;
+}
+
 std::vector<LevelInfo> plan_pyramid(const std::array<uint64_t, 3>& dims, const std::array<double, 3>& voxel_size,
                                     uint32_t chunk_size) {
   std::vector<LevelInfo> levels;

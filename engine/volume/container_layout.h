@@ -30,6 +30,12 @@ struct ContainerLayout {
   uint64_t total_chunks() const;
   // True when `key` names a chunk inside the volume.
   bool contains(const ChunkKey& key) const;
+  // The index lists every chunk once, sorted by (level, timepoint, channel,
+  // z, y, x), so a chunk's entry sits at a computable position: these map a
+  // key (which must be contains()) to its position and back (position <
+  // total_chunks()).
+  uint64_t index_position(const ChunkKey& key) const;
+  ChunkKey key_at(uint64_t position) const;
 };
 
 // The resolution pyramid for a volume: level 0 is `dims`; each next level

@@ -4,14 +4,6 @@
 #include <cstring>
 
 namespace vxr {
-namespace {
-
-uint64_t slot_of(const LevelInfo& li, uint32_t channels, const ChunkKey& k) {
-  const auto& c = li.chunk_counts;
-  return (((uint64_t(k.timepoint) * channels + k.channel) * c[2] + k.z) * c[1] + k.y) * c[0] + k.x;
-}
-
-}  // namespace
 
 Result<std::unique_ptr<ContainerReader>> ContainerReader::open(const std::string& path) {
   std::unique_ptr<ContainerReader> r(new ContainerReader());
@@ -24,6 +16,7 @@ Result<std::unique_ptr<ContainerReader>> ContainerReader::open(const std::string
   VXR_RETURN_IF_ERROR(r->file_.read_at(head.data(), head.size(), 0));
   uint64_t header_bytes = 0;
   VXR_ASSIGN_OR_RETURN(r->layout_, parse_header(head, path, &header_bytes));
+  r->header_bytes_ = header_bytes;
   const uint64_t header_sum = [&] {
     uint64_t s;
     std::memcpy(&s, head.data() + header_bytes - 8, 8);
@@ -42,55 +35,99 @@ Result<std::unique_ptr<ContainerReader>> ContainerReader::open(const std::string
   if (f.file_bytes != size) return corrupt(path + ": file is " + std::to_string(size) + " bytes, its footer says " +
                                            std::to_string(f.file_bytes) + " (truncated or appended to)");
   if (f.header_checksum != header_sum) return corrupt(path + ": footer does not belong to this header");
-  if (f.index_offset < header_bytes || f.index_bytes != sizeof(vxc::IndexHeader) + f.chunk_count * sizeof(vxc::IndexEntry) ||
+  if (f.index_offset < header_bytes || f.chunk_count > size / sizeof(vxc::IndexEntry) ||
+      f.index_bytes != sizeof(vxc::IndexHeader) + f.chunk_count * sizeof(vxc::IndexEntry) ||
       f.index_offset + f.index_bytes + sizeof f != size)
     return corrupt(path + ": footer points at an impossible index");
-  std::vector<uint8_t> index(f.index_bytes);
-  VXR_RETURN_IF_ERROR(r->file_.read_at(index.data(), index.size(), f.index_offset));
-  if (vxc::checksum(index.data(), index.size()) != f.index_checksum)
-    return corrupt(path + ": chunk index fails its checksum (the file is damaged); run `vxr verify`");
-  vxc::IndexHeader ih;
-  std::memcpy(&ih, index.data(), sizeof ih);
-  if (std::memcmp(ih.magic, vxc::kIndexMagic, 8) != 0 || ih.count != f.chunk_count)
-    return corrupt(path + ": chunk index is damaged");
   const ContainerLayout& L = r->layout_;
   if (f.chunk_count != L.total_chunks())
     return corrupt(path + ": index lists " + std::to_string(f.chunk_count) + " chunks, the pyramid needs " +
                    std::to_string(L.total_chunks()));
-  r->entries_.resize(f.chunk_count);
-  if (f.chunk_count) std::memcpy(r->entries_.data(), index.data() + sizeof ih, f.chunk_count * sizeof(vxc::IndexEntry));
-  r->slots_.resize(L.levels.size());
-  for (uint32_t l = 0; l < L.levels.size(); ++l) r->slots_[l].assign(L.chunks_in_level(l) * L.info.channels * L.info.timepoints, -1);
+  r->chunk_count_ = f.chunk_count;
   r->index_offset_ = f.index_offset;
-  for (size_t i = 0; i < r->entries_.size(); ++i) {
-    const auto& e = r->entries_[i];
-    const ChunkKey k = key_of(e);
-    if (!L.contains(k) || e.codec > 3 || e.raw_size != L.payload_bytes() || e.offset < header_bytes ||
-        e.offset + sizeof(vxc::RecordHeader) + e.stored_size > f.index_offset)
-      return corrupt(path + ": index entry " + std::to_string(i) + " is invalid");
-    int64_t& slot = r->slots_[k.level][slot_of(L.levels[k.level], L.info.channels, k)];
-    if (slot >= 0) return corrupt(path + ": index lists " + describe_key(k) + " twice");
-    slot = static_cast<int64_t>(i);
-  }
+
+  // One streaming pass: the checksum of the whole index, and every entry at
+  // the position its key implies (so no duplicates, none missing).
+  std::string bad_entry;
+  uint64_t uniform = 0;
+  VXR_ASSIGN_OR_RETURN(const IndexScan scan,
+                       scan_index(r->file_, f.index_offset, f.chunk_count, [&](uint64_t i, const vxc::IndexEntry& e) {
+                         if (bad_entry.empty()) bad_entry = r->check_entry(i, e);
+                         uniform += e.codec == uint8_t(vxc::Codec::kUniform);
+                       }));
+  if (scan.checksum != f.index_checksum)
+    return corrupt(path + ": chunk index fails its checksum (the file is damaged); run `vxr verify`");
+  if (std::memcmp(scan.header.magic, vxc::kIndexMagic, 8) != 0 || scan.header.count != f.chunk_count)
+    return corrupt(path + ": chunk index is damaged");
+  if (!bad_entry.empty()) return corrupt(path + ": " + bad_entry);
+  r->uniform_chunks_ = uniform;
+  r->cache_.resize(kIndexCacheBlocks);
   return r;
 }
 
-const vxc::IndexEntry* ContainerReader::find(const ChunkKey& key) const {
-  if (!layout_.contains(key)) return nullptr;
-  const int64_t i = slots_[key.level][slot_of(layout_.levels[key.level], layout_.info.channels, key)];
-  return i < 0 ? nullptr : &entries_[static_cast<size_t>(i)];
+std::string ContainerReader::check_entry(uint64_t i, const vxc::IndexEntry& e) const {
+  const ContainerLayout& L = layout_;
+  const ChunkKey k = key_of(e);
+  if (!(k == L.key_at(i)))
+    return "index entry " + std::to_string(i) + " is invalid: it names " + describe_key(k) + " where " +
+           describe_key(L.key_at(i)) + " belongs (run `vxr verify`)";
+  if (e.codec > 3 || e.raw_size != L.payload_bytes() || e.offset < header_bytes_ || e.offset > index_offset_ ||
+      e.stored_size > index_offset_ - e.offset || index_offset_ - e.offset - e.stored_size < sizeof(vxc::RecordHeader))
+    return "index entry " + std::to_string(i) + " (" + describe_key(k) +
+           ") is invalid: bad codec, size or offset (run `vxr verify`)";
+  return {};
+}
+
+Result<vxc::IndexEntry> ContainerReader::entry_at(uint64_t i) const {
+  if (i >= chunk_count_) return out_of_range(path_ + ": no index entry " + std::to_string(i));
+  const uint64_t block = i / kIndexBlockEntries;
+  CacheSlot& slot = cache_[block % kIndexCacheBlocks];
+  vxc::IndexEntry e;
+  bool hit = false;
+  {
+    std::lock_guard lock(cache_mutex_);
+    if (slot.block == block) {
+      e = slot.entries[i - block * kIndexBlockEntries];
+      hit = true;
+    }
+  }
+  if (!hit) {
+    // Miss: read the block without holding the lock, then install it.
+    const uint64_t first = block * kIndexBlockEntries;
+    std::vector<vxc::IndexEntry> entries(std::min(kIndexBlockEntries, chunk_count_ - first));
+    VXR_RETURN_IF_ERROR(file_.read_at(entries.data(), entries.size() * sizeof(vxc::IndexEntry),
+                                      index_offset_ + sizeof(vxc::IndexHeader) + first * sizeof(vxc::IndexEntry)));
+    e = entries[i - first];
+    std::lock_guard lock(cache_mutex_);
+    slot.block = block;
+    slot.entries = std::move(entries);
+  }
+  // open() checked every entry and the index checksum; this catches a file
+  // changed underneath us since.
+  if (std::string bad = check_entry(i, e); !bad.empty()) return corrupt(path_ + ": " + bad);
+  return e;
+}
+
+Result<vxc::IndexEntry> ContainerReader::entry(const ChunkKey& key) const {
+  if (!layout_.contains(key)) return not_found(path_ + ": no " + describe_key(key));
+  return entry_at(layout_.index_position(key));
+}
+
+uint64_t ContainerReader::resident_index_bytes() const {
+  std::lock_guard lock(cache_mutex_);
+  uint64_t bytes = 0;
+  for (const CacheSlot& s : cache_) bytes += s.entries.size() * sizeof(vxc::IndexEntry);
+  return bytes;
 }
 
 Result<ChunkStats> ContainerReader::stats(const ChunkKey& key) const {
-  const vxc::IndexEntry* e = find(key);
-  if (!e) return not_found(path_ + ": no " + describe_key(key));
-  return ChunkStats{e->min, e->max};
+  VXR_ASSIGN_OR_RETURN(const vxc::IndexEntry e, entry(key));
+  return ChunkStats{e.min, e.max};
 }
 
 Result<std::shared_ptr<const Chunk>> ContainerReader::read(const ChunkKey& key) const {
-  const vxc::IndexEntry* e = find(key);
-  if (!e) return not_found(path_ + ": no " + describe_key(key));
-  return read_chunk_record(file_, layout_, *e, index_offset_);
+  VXR_ASSIGN_OR_RETURN(const vxc::IndexEntry e, entry(key));
+  return read_chunk_record(file_, layout_, e, index_offset_);
 }
 
 double ContainerReader::compression_ratio() const {

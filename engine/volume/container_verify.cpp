@@ -1,8 +1,6 @@
 #include "volume/container_verify.h"
 
 #include <cstring>
-#include <set>
-#include <tuple>
 
 #include "volume/container_io.h"
 #include "volume/container_layout.h"
@@ -68,39 +66,37 @@ VerifyReport verify_container(const std::string& path) {
   };
 
   if (footer_ok) {
-    std::vector<uint8_t> index(f.index_bytes);
-    if (Status s = file->read_at(index.data(), index.size(), f.index_offset); !s) {
-      rep.problems.push_back("index: " + s.message());
-      return rep;
-    }
-    if (vxc::checksum(index.data(), index.size()) != f.index_checksum)
-      rep.problems.push_back("index: fails its checksum");
-    vxc::IndexHeader ih;
-    std::memcpy(&ih, index.data(), sizeof ih);
-    if (std::memcmp(ih.magic, vxc::kIndexMagic, 8) != 0 || ih.count != f.chunk_count) {
-      rep.problems.push_back("index: header is damaged");
-      return rep;
-    }
     if (f.chunk_count != L.total_chunks())
       rep.problems.push_back("index: lists " + std::to_string(f.chunk_count) + " chunks, the pyramid needs " +
                              std::to_string(L.total_chunks()));
-    std::set<std::tuple<uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t>> seen;
-    for (uint64_t i = 0; i < f.chunk_count; ++i) {
-      vxc::IndexEntry e;
-      std::memcpy(&e, index.data() + sizeof ih + i * sizeof e, sizeof e);
+    // Streamed in bounded memory. The index is complete and sorted, so entry
+    // i must name the chunk at position i: that also rules out duplicates.
+    const bool positions = f.chunk_count == L.total_chunks();
+    auto scan = scan_index(*file, f.index_offset, f.chunk_count, [&](uint64_t i, const vxc::IndexEntry& e) {
       const ChunkKey k = key_of(e);
       if (!L.contains(k)) {
         rep.problems.push_back("index: entry " + std::to_string(i) + " names a chunk outside the volume");
-        continue;
+        return;
       }
-      if (!seen.insert({k.level, k.timepoint, k.channel, k.z, k.y, k.x}).second)
-        rep.problems.push_back("index: " + describe_key(k) + " listed twice");
-      if (e.offset < header_bytes || e.offset + sizeof(vxc::RecordHeader) + e.stored_size > f.index_offset) {
+      if (positions && !(L.key_at(i) == k)) {
+        rep.problems.push_back("index: entry " + std::to_string(i) + " names " + describe_key(k) + " where " +
+                               describe_key(L.key_at(i)) + " belongs (damaged, duplicated or out of order)");
+        return;
+      }
+      if (e.offset < header_bytes || e.offset > f.index_offset || e.stored_size > f.index_offset - e.offset ||
+          f.index_offset - e.offset - e.stored_size < sizeof(vxc::RecordHeader)) {
         rep.problems.push_back("chunk " + describe_key(k) + ": index entry points outside the chunk area");
-        continue;
+        return;
       }
       check_entry(e, f.index_offset);
+    });
+    if (!scan) {
+      rep.problems.push_back("index: " + scan.status().message());
+      return rep;
     }
+    if (std::memcmp(scan->header.magic, vxc::kIndexMagic, 8) != 0 || scan->header.count != f.chunk_count)
+      rep.problems.insert(rep.problems.begin(), "index: header is damaged");
+    if (scan->checksum != f.index_checksum) rep.problems.insert(rep.problems.begin(), "index: fails its checksum");
     return rep;
   }
 
