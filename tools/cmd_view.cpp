@@ -5,12 +5,10 @@
 // desktop window when a display is there, else headless. --xr / --desktop /
 // --headless force one; --frames N renders N frames and exits cleanly.
 #include <cstdio>
-#include <filesystem>
 
 #include "assets/assets.h"
 #include "command.h"
 #include "volume/load_dense.h"
-#include "volume/importers/import_source.h"
 #include "xr/headless/headless_target.h"
 #include "xr/target_factory.h"
 #include "xr/view_session.h"
@@ -33,44 +31,19 @@ struct Options {
   uint32_t width = 0, height = 0;
 };
 
-// Any importable dataset small enough to upload whole (the ray caster takes one
-// 3D texture); channel 0, timepoint 0.
-Result<DenseVolume> import_whole(const std::string& path) {
-  VXR_ASSIGN_OR_RETURN(std::unique_ptr<SlabSource> src, open_import_source({path}));
-  const VolumeInfo& info = src->info();
-  for (const std::string& w : src->warnings()) std::fprintf(stderr, "vxr view: %s: %s\n", path.c_str(), w.c_str());
-  if (info.dtype != DType::kU8 && info.dtype != DType::kU16)
-    return unsupported(path + ": vxr view shows u8 or u16 data, this is " + dtype_name(info.dtype) +
-                       "; convert it first");
-  constexpr uint64_t kMaxSide = 1024;
-  if (info.dims[0] > kMaxSide || info.dims[1] > kMaxSide || info.dims[2] > kMaxSide)
-    return unsupported(path + ": " + std::to_string(info.dims[0]) + "x" + std::to_string(info.dims[1]) + "x" +
-                       std::to_string(info.dims[2]) + " is over vxr view's whole-volume limit of " +
-                       std::to_string(kMaxSide) + " per side; crop or downsample it first");
-  DenseVolume v;
-  v.dims = {uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])};
-  v.dtype = info.dtype;
-  v.voxel_size = info.voxel_size;
-  v.unit = info.unit;
-  v.data.resize(v.byte_size());
-  Box3 all;
-  all.size = info.dims;
-  VXR_RETURN_IF_ERROR(src->read_region(0, 0, all, v.data));
-  return v;
-}
-
+// The whole-volume caster takes one 3D texture: a .vxc gives the finest
+// pyramid level that fits, any other input is read whole and averaged down to
+// fit (load_for_render, shared with `vxr render`); channel 0, timepoint 0.
 Result<DenseVolume> load_input(const Options& o) {
   if (o.sample || o.input.empty()) return assets::sample_volume();
-  const std::string ext = std::filesystem::path(o.input).extension().string();
-  if (ext == ".vxc") {  // the finest pyramid level that the whole-volume caster can hold
-    VXR_ASSIGN_OR_RETURN(LoadedVolume loaded, load_for_render(o.input, 1024, uint64_t(1) << 30));
-    for (const std::string& n : loaded.notes) std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
-    if (loaded.channels[0].dtype != DType::kU8 && loaded.channels[0].dtype != DType::kU16)
-      return unsupported(o.input + ": vxr view shows u8 or u16 data, this is " +
-                         dtype_name(loaded.channels[0].dtype));
-    return std::move(loaded.channels[0]);
-  }
-  return import_whole(o.input);
+  VXR_ASSIGN_OR_RETURN(LoadedVolume loaded, load_for_render(o.input, 1024, uint64_t(1) << 30));
+  for (const std::string& n : loaded.notes) std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
+  if (loaded.channels.size() > 1)
+    std::fprintf(stderr, "vxr view: %s: showing channel 0 of %zu\n", o.input.c_str(), loaded.channels.size());
+  if (loaded.channels[0].dtype != DType::kU8 && loaded.channels[0].dtype != DType::kU16)
+    return unsupported(o.input + ": vxr view shows u8 or u16 data, this is " + dtype_name(loaded.channels[0].dtype) +
+                       "; convert it first");
+  return std::move(loaded.channels[0]);
 }
 
 int run(const Options& o) {
