@@ -13,6 +13,7 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "assets/assets.h"
@@ -41,6 +42,7 @@ struct Options {
 
 struct CodecFigures {
   double compress_mb_s = 0, decompress_mb_s = 0, ratio = 0;
+  uint64_t decode_errors = 0;  // must stay 0: the timed decode really decoded every block
 };
 
 // Compresses `data` in blocks of `block` bytes, repeating until ~0.3 s passed.
@@ -52,7 +54,6 @@ CodecFigures measure_codec(const std::vector<uint8_t>& data, size_t block, uint3
   double seconds = 0;
   int passes = 0;
   do {
-    compressed.clear();
     for (size_t off = 0; off < data.size(); off += block) {
       const size_t n = std::min(block, data.size() - off);
       const uint8_t* src = data.data() + off;
@@ -72,6 +73,7 @@ CodecFigures measure_codec(const std::vector<uint8_t>& data, size_t block, uint3
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   } while (seconds < 0.3);
   CodecFigures f;
+  if (compressed.empty()) return f;
   f.compress_mb_s = double(in_bytes) * passes / seconds / 1e6;
   f.ratio = double(in_bytes) / double(out_bytes);
   std::vector<uint8_t> dec(block);
@@ -81,9 +83,12 @@ CodecFigures measure_codec(const std::vector<uint8_t>& data, size_t block, uint3
     size_t off = 0;
     for (const auto& c : compressed) {
       const size_t n = std::min(block, data.size() - off);
-      LZ4_decompress_safe(reinterpret_cast<const char*>(c.data()), reinterpret_cast<char*>(dec.data()),
-                          static_cast<int>(c.size()), static_cast<int>(n));
+      if (LZ4_decompress_safe(reinterpret_cast<const char*>(c.data()), reinterpret_cast<char*>(dec.data()),
+                              static_cast<int>(c.size()), static_cast<int>(n)) != static_cast<int>(n))
+        f.decode_errors++;
       if (shuffle) byte_unshuffle(dec.data(), shuffled.data(), n / bpv, bpv);
+      if (passes == 0 && std::memcmp(shuffle ? shuffled.data() : dec.data(), data.data() + off, n) != 0)
+        f.decode_errors++;
       off += n;
     }
     ++passes;
@@ -151,6 +156,8 @@ int run(const Options& o) {
   const CodecFigures lz4 = measure_codec(data, block, bpv, false);
   CodecFigures shuf;
   if (bpv > 1) shuf = measure_codec(data, block, bpv, true);
+  if (lz4.decode_errors || shuf.decode_errors)
+    return fail(internal_error("bench import: a timed LZ4 block did not decode back to its input"));
   const CodecFigures& used = default_codec(info.dtype) == vxc::Codec::kShuffleLz4 ? shuf : lz4;
 
   nlohmann::json doc;
