@@ -218,6 +218,8 @@ int run_synth_tiff(const SynthTiffOptions& o) {
     if (ec) return fail(io_error(o.output + ": cannot create the folder (" + ec.message() + ")"));
     page_info.dims[2] = 1;
   } else {
+    if (const auto parent = std::filesystem::path(o.output).parent_path(); !parent.empty())
+      std::filesystem::create_directories(parent, ec);
     auto w = TiffStackWriter::create(o.output, page_info);
     if (!w) return fail(w.status());
     stack = std::move(*w);
