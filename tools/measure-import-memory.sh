@@ -2,7 +2,8 @@
 # Measures peak memory (RSS) and speed of `vxr import --memory 256M` on a
 # >= 2 GiB u16 TIFF stack (issue 3 acceptance: peak under 600 MB).
 #
-#   tools/measure-import-memory.sh [VXR] [--dims X,Y,Z] [--memory 256M] [--slices] [--keep] [--dir SCRATCH]
+#   tools/measure-import-memory.sh [VXR] [--dims X,Y,Z] [--memory 256M] [--slices] [--compression lzw|deflate]
+#                                  [--keep] [--dir SCRATCH]
 #
 # Generates the synthetic microscopy volume (cells + shot noise, see
 # engine/volume/synthetic_microscopy.h) as one multi-page TIFF (or, with
@@ -16,6 +17,7 @@ vxr=build/release/tools/vxr
 dims=1024,1024,1100
 memory=256M
 slices=
+compression=none
 keep=
 scratch=${TMPDIR:-/tmp}
 while [ $# -gt 0 ]; do
@@ -23,9 +25,10 @@ while [ $# -gt 0 ]; do
     --dims) dims=$2; shift 2 ;;
     --memory) memory=$2; shift 2 ;;
     --slices) slices=--slices; shift ;;
+    --compression) compression=$2; shift 2 ;;
     --keep) keep=1; shift ;;
     --dir) scratch=$2; shift 2 ;;
-    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
     *) vxr=$1; shift ;;
   esac
 done
@@ -36,8 +39,8 @@ work=$(mktemp -d "$scratch/vxr-import-mem.XXXXXX")
 [ -n "$keep" ] || trap 'rm -rf "$work"' EXIT
 if [ -n "$slices" ]; then input=$work/slices; else input=$work/big.tif; fi
 
-echo "== generating $dims u16 TIFF ${slices:+(single-page slices) }in $work"
-"$vxr" bench synth-tiff --dims "$dims" -o "$input" $slices
+echo "== generating $dims u16 TIFF ${slices:+(single-page slices) }(compression $compression) in $work"
+"$vxr" bench synth-tiff --dims "$dims" -o "$input" $slices --compression "$compression"
 input_bytes=$(du -sb "$input" | cut -f1)
 
 echo "== vxr import --memory $memory"
@@ -54,6 +57,8 @@ echo "== vxr verify"
 "$vxr" verify "$work/big.vxc" | tail -n 1
 "$vxr" info "$work/big.vxc" | sed -n '1,12p'
 
-awk -v kb="$peak_kb" -v b="$input_bytes" -v s="$secs" -v m="$memory" -v d="$dims" 'BEGIN {
-  printf "RESULT: input %s u16 %.2f GiB, --memory %s: peak RSS %.0f MB, wall %.1f s, %.1f MB/s\n",
-         d, b / 2^30, m, kb * 1024 / 1e6, s, b / s / 1e6 }'
+IFS=, read -r dx dy dz <<< "$dims"
+awk -v kb="$peak_kb" -v b="$input_bytes" -v s="$secs" -v m="$memory" -v d="$dims" -v c="$compression" \
+    -v v="$((dx * dy * dz * 2))" 'BEGIN {
+  printf "RESULT: input %s u16 (%.2f GiB of voxels, %.2f GiB on disk, compression %s), --memory %s: peak RSS %.0f MB, wall %.1f s, %.1f MB/s of voxels\n",
+         d, v / 2^30, b / 2^30, c, m, kb * 1024 / 1e6, s, v / s / 1e6 }'

@@ -46,7 +46,7 @@ bool needs_big_tiff(const VolumeInfo& info) {
 }
 
 Result<std::unique_ptr<TiffStackWriter>> TiffStackWriter::create(const std::string& path, const VolumeInfo& info,
-                                                                 bool force_bigtiff) {
+                                                                 bool force_bigtiff, TiffCompression compression) {
   if (!info.dims[0] || !info.dims[1] || !info.dims[2] || info.dims[0] > 0xffffffffu || info.dims[1] > 0xffffffffu)
     return invalid_argument(path + ": cannot write a TIFF page of " + std::to_string(info.dims[0]) + " x " +
                             std::to_string(info.dims[1]) + " voxels");
@@ -54,7 +54,8 @@ Result<std::unique_ptr<TiffStackWriter>> TiffStackWriter::create(const std::stri
   w->path_ = path;
   w->partial_ = path + ".partial";
   w->info_ = info;
-  w->big_ = force_bigtiff || needs_big_tiff(info);
+  w->big_ = force_bigtiff || needs_big_tiff(info);  // compressed data is never larger than this assumes
+  w->compression_ = compression;
   w->sink_ = std::make_unique<Sink>();
   std::error_code ec;
   const std::filesystem::path parent = std::filesystem::absolute(path, ec).parent_path();
@@ -107,7 +108,13 @@ Status TiffStackWriter::write_page(const uint8_t* voxels) {
   TIFFSetField(tif_, TIFFTAG_SAMPLEFORMAT, format);
   TIFFSetField(tif_, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
   TIFFSetField(tif_, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
-  TIFFSetField(tif_, TIFFTAG_COMPRESSION, COMPRESSION_NONE);
+  switch (compression_) {
+    case TiffCompression::kNone: TIFFSetField(tif_, TIFFTAG_COMPRESSION, COMPRESSION_NONE); break;
+    case TiffCompression::kLzw: TIFFSetField(tif_, TIFFTAG_COMPRESSION, COMPRESSION_LZW); break;
+    case TiffCompression::kDeflate: TIFFSetField(tif_, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE); break;
+  }
+  if (compression_ != TiffCompression::kNone && format != SAMPLEFORMAT_IEEEFP)
+    TIFFSetField(tif_, TIFFTAG_PREDICTOR, PREDICTOR_HORIZONTAL);
   if (pages_ == 0) TIFFSetField(tif_, TIFFTAG_IMAGEDESCRIPTION, description_.c_str());
   if (info_.unit != "px" && info_.voxel_size[0] > 0 && info_.voxel_size[1] > 0) {
     TIFFSetField(tif_, TIFFTAG_XRESOLUTION, float(1.0 / info_.voxel_size[0]));
@@ -120,7 +127,12 @@ Status TiffStackWriter::write_page(const uint8_t* voxels) {
   TIFFSetField(tif_, TIFFTAG_ROWSPERSTRIP, rows_per_strip);
   for (uint32_t y = 0, s = 0; y < h; y += rows_per_strip, ++s) {
     const uint32_t n = std::min(rows_per_strip, h - y);
-    if (TIFFWriteEncodedStrip(tif_, s, const_cast<uint8_t*>(voxels + row * y), tmsize_t(row * n)) < 0)
+    uint8_t* strip = const_cast<uint8_t*>(voxels + row * y);
+    if (compression_ != TiffCompression::kNone) {  // the predictor differences the buffer in place: use a copy
+      scratch_.assign(strip, strip + row * n);
+      strip = scratch_.data();
+    }
+    if (TIFFWriteEncodedStrip(tif_, s, strip, tmsize_t(row * n)) < 0)
       return io_error(path_ + ": cannot write page " + std::to_string(pages_) + " (" + sink_->first_error + ")");
   }
   if (!TIFFWriteDirectory(tif_))

@@ -1,7 +1,8 @@
 // Writes a multi-page TIFF that ImageJ/Fiji, tifffile and our own importer
 // read back: one page per (c, z, t) plane in ImageJ hyperstack order (XYCZT,
 // channel fastest), uncompressed, with ImageJ metadata (channels, slices,
-// frames, unit, spacing) and XResolution = 1 / pixel size.
+// frames, unit, spacing) and XResolution = 1 / pixel size. Uncompressed
+// unless asked (TiffCompression).
 //
 // The file appears atomically: pages go to "<path>.partial" and are renamed
 // over `path` only by finish(); a writer destroyed unfinished removes its
@@ -13,6 +14,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/status.h"
 #include "volume/volume_info.h"
@@ -21,12 +23,17 @@ typedef struct tiff TIFF;
 
 namespace vxr {
 
+// Strip compression. LZW and Deflate use the horizontal-differencing
+// predictor for integer data (what Fiji and tifffile write for microscopy).
+enum class TiffCompression { kNone, kLzw, kDeflate };
+
 class TiffStackWriter {
  public:
   // info: dims of each page (x, y) and the z count, dtype, channels,
   // timepoints, voxel size and unit. force_bigtiff: for tests.
   static Result<std::unique_ptr<TiffStackWriter>> create(const std::string& path, const VolumeInfo& info,
-                                                          bool force_bigtiff = false);
+                                                          bool force_bigtiff = false,
+                                                          TiffCompression compression = TiffCompression::kNone);
   ~TiffStackWriter();
   TiffStackWriter(const TiffStackWriter&) = delete;
   TiffStackWriter& operator=(const TiffStackWriter&) = delete;
@@ -49,6 +56,8 @@ class TiffStackWriter {
   TIFF* tif_ = nullptr;
   std::unique_ptr<Sink> sink_;
   bool big_ = false;
+  TiffCompression compression_ = TiffCompression::kNone;
+  std::vector<uint8_t> scratch_;
   bool finished_ = false;
   uint64_t pages_ = 0;
   std::string description_;

@@ -193,6 +193,7 @@ struct SynthTiffOptions {
   std::string dims = "1024,1024,1100";
   std::string output;
   bool slices = false;
+  std::string compression = "none";
   uint64_t seed = 1234;
 };
 
@@ -206,6 +207,11 @@ int run_synth_tiff(const SynthTiffOptions& o) {
       dims[0] == 0 || dims[1] == 0 || dims[2] == 0 || dims[0] > 65535 || dims[1] > 65535 || dims[2] > 1000000)
     return fail(invalid_argument("--dims '" + o.dims + "': give x,y,z, e.g. 1024,1024,1100 (x, y at most 65535)"),
                 cli::kExitUsage);
+  TiffCompression compression = TiffCompression::kNone;
+  if (o.compression == "lzw") compression = TiffCompression::kLzw;
+  else if (o.compression == "deflate") compression = TiffCompression::kDeflate;
+  else if (o.compression != "none")
+    return fail(invalid_argument("--compression '" + o.compression + "': use none, lzw or deflate"), cli::kExitUsage);
   SyntheticMicroscopySource source(dims, o.seed);
   VolumeInfo page_info = source.info();
   const uint64_t plane_bytes = dims[0] * dims[1] * 2;
@@ -220,7 +226,7 @@ int run_synth_tiff(const SynthTiffOptions& o) {
   } else {
     if (const auto parent = std::filesystem::path(o.output).parent_path(); !parent.empty())
       std::filesystem::create_directories(parent, ec);
-    auto w = TiffStackWriter::create(o.output, page_info);
+    auto w = TiffStackWriter::create(o.output, page_info, false, compression);
     if (!w) return fail(w.status());
     stack = std::move(*w);
   }
@@ -234,7 +240,7 @@ int run_synth_tiff(const SynthTiffOptions& o) {
     } else {
       char name[32];
       std::snprintf(name, sizeof name, "slice_%05llu.tif", static_cast<unsigned long long>(z));
-      auto w = TiffStackWriter::create((std::filesystem::path(o.output) / name).string(), page_info);
+      auto w = TiffStackWriter::create((std::filesystem::path(o.output) / name).string(), page_info, false, compression);
       if (!w) return fail(w.status());
       if (Status s = (*w)->write_page(plane.data()); !s) return fail(s);
       if (Status s = (*w)->finish(); !s) return fail(s);
@@ -244,10 +250,11 @@ int run_synth_tiff(const SynthTiffOptions& o) {
   if (stack)
     if (Status s = stack->finish(); !s) return fail(s);
   progress.finish();
-  std::printf("%s: %llux%llux%llu u16 synthetic microscopy (%zu cells), %.2f GiB%s\n", o.output.c_str(),
+  std::printf("%s: %llux%llux%llu u16 synthetic microscopy (%zu cells), %.2f GiB of voxels%s%s\n", o.output.c_str(),
               static_cast<unsigned long long>(dims[0]), static_cast<unsigned long long>(dims[1]),
               static_cast<unsigned long long>(dims[2]), source.blob_count(),
-              double(plane_bytes * dims[2]) / double(uint64_t(1) << 30), o.slices ? " in single-page slices" : "");
+              double(plane_bytes * dims[2]) / double(uint64_t(1) << 30), o.slices ? " in single-page slices" : "",
+              compression == TiffCompression::kNone ? "" : (", " + o.compression + " compressed").c_str());
   return kExitOk;
 }
 
@@ -260,6 +267,7 @@ void add_synth_tiff_bench(CLI::App& bench, cli::Invocation& inv) {
   cmd->add_option("--dims", o->dims, "x,y,z voxels (default 1024,1024,1100: 2.15 GiB)");
   cmd->add_option("-o,--output", o->output, "output .tif (or folder with --slices)")->required();
   cmd->add_flag("--slices", o->slices, "write a folder of single-page TIFF slices instead of one multi-page file");
+  cmd->add_option("--compression", o->compression, "none (default), lzw or deflate (with the horizontal predictor)");
   cmd->add_option("--seed", o->seed, "random seed (default 1234)");
   cmd->callback([&inv, o] { inv.run = [o] { return run_synth_tiff(*o); }; });
 }
