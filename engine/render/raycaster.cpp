@@ -199,8 +199,14 @@ Result<ImageRgbaF> Raycaster::render_float(const Camera& camera, const RenderSet
   VXR_RETURN_IF_ERROR(validate_render_settings(s, channel_count()));
   VXR_RETURN_IF_ERROR(ensure_target(width, height));
 
-  const TransferTable table = build_transfer_table(s);
-  VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, transfer_tex_, table.rgba.data(), table.rgba.size() * sizeof(glm::vec4)));
+  // The table changes only when the settings do: a frame loop (XR, benches)
+  // pays its upload (a staging copy and a submit) once, not per eye and frame.
+  TransferTable table = build_transfer_table(s);
+  if (table.rgba != uploaded_table_) {
+    VXR_RETURN_IF_ERROR(
+        gpu::upload_image(ctx_, transfer_tex_, table.rgba.data(), table.rgba.size() * sizeof(glm::vec4)));
+    uploaded_table_ = std::move(table.rgba);
+  }
   gpu::write_combined_image(ctx_, set_, 3, has_depth_ ? depth_tex_.view : empty_depth_.view, nearest_);
 
   const RaycastSetup setup = plan_raycast(camera, s, placement_, value_scales_, width, height);

@@ -79,6 +79,7 @@ class Raycaster {
   gpu::Handle<VkSampler> nearest_;
   std::vector<gpu::Image> volume_tex_;
   gpu::Image transfer_tex_;
+  std::vector<glm::vec4> uploaded_table_;  // what transfer_tex_ holds
   gpu::Image depth_tex_;
   gpu::Image empty_depth_;
   gpu::Image target_;
