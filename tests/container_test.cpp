@@ -249,6 +249,22 @@ TEST_CASE("container: uniform chunks are stored without payload and read back as
   CHECK(voxel((*corner)->data, DType::kI16, 0) == 1000);                      // apron repeats the edge
 }
 
+TEST_CASE("codec: byte shuffle puts byte b of element i at b * n + i, for 2, 3 and 4 byte elements") {
+  for (uint32_t e : {2u, 3u, 4u}) {
+    CAPTURE(e);
+    const size_t n = 1001;  // not a multiple of any vector width
+    std::vector<uint8_t> src(n * e), shuf(n * e), back(n * e);
+    for (size_t i = 0; i < src.size(); ++i) src[i] = uint8_t((i * 2654435761u) >> 11);
+    byte_shuffle(src.data(), shuf.data(), n, e);
+    bool layout = true;
+    for (size_t i = 0; i < n; ++i)
+      for (uint32_t b = 0; b < e; ++b) layout = layout && shuf[b * n + i] == src[i * e + b];
+    CHECK(layout);
+    byte_unshuffle(shuf.data(), back.data(), n, e);
+    CHECK(back == src);
+  }
+}
+
 TEST_CASE("codec: byte shuffle round-trips and LZ4 payloads decode exactly") {
   std::vector<uint8_t> v(18 * 18 * 18 * 2);
   std::mt19937 rng(1);

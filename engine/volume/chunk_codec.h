@@ -41,7 +41,8 @@ EncodedChunk encode_chunk(const ChunkKey& key, DType dtype, std::span<const uint
 Status decode_payload(vxc::Codec codec, DType dtype, const ChunkStats& stats, std::span<const uint8_t> stored,
                       std::span<uint8_t> out);
 
-// Byte shuffle: dst[b * n + i] = byte b of element i (n elements of elem_bytes).
+// Byte shuffle: dst[b * n + i] = byte b of element i (n elements of elem_bytes);
+// src and dst must not overlap.
 void byte_shuffle(const uint8_t* src, uint8_t* dst, size_t n, uint32_t elem_bytes);
 void byte_unshuffle(const uint8_t* src, uint8_t* dst, size_t n, uint32_t elem_bytes);
 
