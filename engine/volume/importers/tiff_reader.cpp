@@ -173,7 +173,12 @@ Result<std::unique_ptr<TiffFile>> TiffFile::open(const std::string& path) {
   TIFFOpenOptionsSetErrorHandlerExtR(opts, on_error, f->sink_.get());
   TIFFOpenOptionsSetWarningHandlerExtR(opts, on_warning, f->sink_.get());
   TIFFOpenOptionsSetMaxSingleMemAlloc(opts, tmsize_t(1) << 31);
-  f->tif_ = TIFFOpenExt(path.c_str(), "r", opts);
+  // "m": no memory mapping. libtiff maps read-only files by default, and every
+  // compressed strip it decodes from the map stays resident (file-backed RSS):
+  // a 1.4 GB LZW stack imported with --memory 256M peaked at 1.7 GB RSS,
+  // 1.38 GB of it the mapped file. read() into libtiff's own strip buffer keeps
+  // memory within the import budget.
+  f->tif_ = TIFFOpenExt(path.c_str(), "rm", opts);
   TIFFOpenOptionsFree(opts);
   if (!f->tif_) {
     const std::string why = f->take_error();
