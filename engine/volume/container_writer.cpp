@@ -9,15 +9,12 @@
 #include <cstring>
 #include <filesystem>
 
+#include <xxhash.h>
+
 #include "core/log.h"
 
 namespace vxr {
 namespace {
-
-bool key_less(const vxc::IndexEntry& a, const vxc::IndexEntry& b) {
-  return std::tie(a.level, a.timepoint, a.channel, a.z, a.y, a.x) <
-         std::tie(b.level, b.timepoint, b.channel, b.z, b.y, b.x);
-}
 
 void fsync_dir_of(const std::string& path) {
   const std::string dir = std::filesystem::path(path).parent_path().string();
@@ -47,6 +44,7 @@ Result<std::unique_ptr<ContainerWriter>> ContainerWriter::create(const std::stri
   w->path_ = path;
   w->partial_ = path + ".partial";
   w->layout_ = layout;
+  w->entries_.resize(layout.total_chunks());  // zeroed: offset 0 marks "not written"
   if (const char* k = std::getenv("VXR_FAULT_KILL_AT_BYTE")) w->kill_at_ = std::strtoull(k, nullptr, 10);
   const std::vector<uint8_t> header = serialize_header(layout);
   std::memcpy(&w->header_checksum_, header.data() + header.size() - 8, 8);
@@ -80,18 +78,19 @@ Result<std::unique_ptr<ContainerWriter>> ContainerWriter::create(const std::stri
         if (!rec) break;
         const vxc::IndexEntry e = entry_from_record(*rec, off);
         const ChunkKey key = key_of(e);
-        if (!layout.contains(key) || e.raw_size != layout.payload_bytes() || w->entries_.count(key)) break;
+        if (!layout.contains(key) || e.raw_size != layout.payload_bytes() || w->present(key)) break;
         payload.resize(e.stored_size);
         if (!payload.empty() && !w->file_.read_at(payload.data(), payload.size(), off + sizeof(vxc::RecordHeader)))
           break;
         if (!payload.empty() && vxc::checksum(payload.data(), payload.size()) != e.payload_checksum) break;
         if (payload.empty() && e.codec != static_cast<uint8_t>(vxc::Codec::kUniform)) break;
-        w->entries_.emplace(key, e);
+        w->entries_[layout.index_position(key)] = e;
+        ++w->count_;
         off += sizeof(vxc::RecordHeader) + e.stored_size;
       }
       if (off < size) VXR_RETURN_IF_ERROR(w->file_.truncate(off));
       w->end_ = off;
-      w->resumed_ = w->entries_.size();
+      w->resumed_ = w->count_;
       log_info(w->partial_ + ": resuming with " + std::to_string(w->resumed_) + " chunks already written");
     }
     // A partial file no longer than a torn header holds nothing worth keeping: start over.
@@ -106,12 +105,12 @@ Result<std::unique_ptr<ContainerWriter>> ContainerWriter::create(const std::stri
 
 bool ContainerWriter::has(const ChunkKey& key) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return entries_.count(key) != 0;
+  return present(key);
 }
 
 uint64_t ContainerWriter::chunk_count() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return entries_.size();
+  return count_;
 }
 
 uint64_t ContainerWriter::bytes_written() const {
@@ -145,9 +144,10 @@ Status ContainerWriter::append(const EncodedChunk& c) {
 
   std::lock_guard<std::mutex> lock(mutex_);
   if (finished_) return internal_error("append after finish");
-  if (entries_.count(c.key)) return internal_error("append: " + describe_key(c.key) + " written twice");
+  if (present(c.key)) return internal_error("append: " + describe_key(c.key) + " written twice");
   VXR_RETURN_IF_ERROR(write_tracked(buf.data(), buf.size(), end_));
-  entries_.emplace(c.key, entry_from_record(r, end_));
+  entries_[layout_.index_position(c.key)] = entry_from_record(r, end_);
+  ++count_;
   end_ += buf.size();
   return Status::ok();
 }
@@ -157,9 +157,8 @@ Result<std::shared_ptr<const Chunk>> ContainerWriter::read(const ChunkKey& key) 
   uint64_t limit;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    auto it = entries_.find(key);
-    if (it == entries_.end()) return not_found(partial_ + ": " + describe_key(key) + " not written yet");
-    e = it->second;
+    if (!present(key)) return not_found(partial_ + ": " + describe_key(key) + " not written yet");
+    e = entries_[layout_.index_position(key)];
     limit = end_;
   }
   return read_chunk_record(file_, layout_, e, limit);
@@ -167,41 +166,43 @@ Result<std::shared_ptr<const Chunk>> ContainerWriter::read(const ChunkKey& key) 
 
 Result<ChunkStats> ContainerWriter::stats(const ChunkKey& key) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  auto it = entries_.find(key);
-  if (it == entries_.end()) return not_found(partial_ + ": " + describe_key(key) + " not written yet");
-  return ChunkStats{it->second.min, it->second.max};
+  if (!present(key)) return not_found(partial_ + ": " + describe_key(key) + " not written yet");
+  const vxc::IndexEntry& e = entries_[layout_.index_position(key)];
+  return ChunkStats{e.min, e.max};
 }
 
 Status ContainerWriter::finish() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (finished_) return internal_error("finish called twice");
-  if (entries_.size() != layout_.total_chunks())
-    return internal_error(partial_ + ": finish with " + std::to_string(entries_.size()) + " of " +
+  if (count_ != layout_.total_chunks())
+    return internal_error(partial_ + ": finish with " + std::to_string(count_) + " of " +
                           std::to_string(layout_.total_chunks()) + " chunks");
-  std::vector<vxc::IndexEntry> sorted;
-  sorted.reserve(entries_.size());
-  for (const auto& [k, e] : entries_) sorted.push_back(e);
-  std::sort(sorted.begin(), sorted.end(), key_less);
+  // entries_ is already in index order (position = index_position(key)): write it as is.
   vxc::IndexHeader ih;
   std::memcpy(ih.magic, vxc::kIndexMagic, 8);
-  ih.count = sorted.size();
-  std::vector<uint8_t> index(sizeof ih + sorted.size() * sizeof(vxc::IndexEntry));
-  std::memcpy(index.data(), &ih, sizeof ih);
-  if (!sorted.empty()) std::memcpy(index.data() + sizeof ih, sorted.data(), sorted.size() * sizeof(vxc::IndexEntry));
+  ih.count = entries_.size();
+  const uint64_t entry_bytes = entries_.size() * sizeof(vxc::IndexEntry);
+  const uint64_t index_bytes = sizeof ih + entry_bytes;
+  std::unique_ptr<XXH64_state_t, decltype(&XXH64_freeState)> hash(XXH64_createState(), &XXH64_freeState);
+  if (!hash) return internal_error(partial_ + ": out of memory hashing the index");
+  XXH64_reset(hash.get(), 0);
+  XXH64_update(hash.get(), &ih, sizeof ih);
+  XXH64_update(hash.get(), entries_.data(), entry_bytes);
 
   vxc::Footer f;
   std::memset(&f, 0, sizeof f);
   f.index_offset = end_;
-  f.index_bytes = index.size();
-  f.chunk_count = sorted.size();
-  f.index_checksum = vxc::checksum(index.data(), index.size());
+  f.index_bytes = index_bytes;
+  f.chunk_count = entries_.size();
+  f.index_checksum = XXH64_digest(hash.get());
   f.header_checksum = header_checksum_;
-  f.file_bytes = end_ + index.size() + sizeof f;
+  f.file_bytes = end_ + index_bytes + sizeof f;
   f.footer_checksum = vxc::checksum(&f, 48);
   std::memcpy(f.magic, vxc::kFooterMagic, 8);
 
-  VXR_RETURN_IF_ERROR(write_tracked(index.data(), index.size(), end_));
-  VXR_RETURN_IF_ERROR(write_tracked(&f, sizeof f, end_ + index.size()));
+  VXR_RETURN_IF_ERROR(write_tracked(&ih, sizeof ih, end_));
+  if (entry_bytes) VXR_RETURN_IF_ERROR(write_tracked(entries_.data(), entry_bytes, end_ + sizeof ih));
+  VXR_RETURN_IF_ERROR(write_tracked(&f, sizeof f, end_ + index_bytes));
   // The file must be durable before its name says it is finished.
   VXR_RETURN_IF_ERROR(file_.sync());
   if (kill_at_ && kill_at_ >= f.file_bytes) std::raise(SIGKILL);  // test hook: die just before the rename

@@ -12,7 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
-#include <unordered_map>
+#include <vector>
 
 #include "core/status.h"
 #include "volume/chunk_codec.h"
@@ -56,12 +56,18 @@ class ContainerWriter {
  private:
   ContainerWriter() = default;
   Status write_tracked(const void* data, uint64_t bytes, uint64_t offset);
+  bool present(const ChunkKey& key) const {
+    return layout_.contains(key) && entries_[layout_.index_position(key)].offset != 0;
+  }
 
   std::string path_, partial_;
   ContainerLayout layout_;
   ContainerFile file_;
   mutable std::mutex mutex_;
-  std::unordered_map<ChunkKey, vxc::IndexEntry, ChunkKeyHash> entries_;
+  // Every chunk's entry at its index position (80 bytes a chunk, already in
+  // index order for finish()); offset 0 means not written yet.
+  std::vector<vxc::IndexEntry> entries_;
+  uint64_t count_ = 0;
   uint64_t end_ = 0;
   uint64_t header_checksum_ = 0;
   uint64_t resumed_ = 0;
