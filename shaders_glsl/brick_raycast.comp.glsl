@@ -8,6 +8,11 @@
 // a wave of (brick, 8x8 tile) work items whose bricks do not overlap on
 // screen, continuing from the accumulation image (the paper's multipass,
 // batched); see engine/render/lod/brick_renderer.h.
+//
+// Classification and compositing are the shared core's
+// (include/raycast_core.glsl: vxr_step, vxr_finish), with the same
+// RaycastParams the dense ray caster reads; this file only decides where the
+// samples are and carries a ray's state between passes.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
@@ -17,16 +22,48 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0) uniform sampler3D atlas_tex;
-layout(binding = 1) uniform sampler2D transfer_tex;  // 256 x 1 RGBA: colour and opacity by value
+layout(binding = 1) uniform sampler2D transfer_tex;  // VXR_TF_SIZE x VXR_MAX_CHANNELS RGBA32F
 layout(binding = 2, rgba8) uniform writeonly image2D out_image;
 layout(binding = 3, rgba32f) uniform image2D accum_image;
 layout(std430, binding = 4) readonly buffer Bricks { BrickRecord bricks[]; };
 layout(std430, binding = 5) buffer Counters { uint samples_lo; uint samples_hi; };
 layout(std430, binding = 6) readonly buffer Items { uvec4 items[]; };  // x: brick, y/z: tile origin in pixels
+layout(std140, binding = 7) uniform Params { RaycastParams P; };
 
 layout(push_constant) uniform Push { BrickCastParams p; };
 
-float windowed(float v) { return clamp((v - p.shading.y) / (p.shading.z - p.shading.y), 0.0, 1.0); }
+#include "include/raycast_core.glsl"
+
+// The brick being marched: vxr_sample reads its atlas slot.
+vec3 g_atlas_origin;
+
+vec4 vxr_sample(vec3 pos) {
+  return vec4(textureLod(atlas_tex, (g_atlas_origin + pos) * p.atlas_inv.xyz, 0.0).r, 0.0, 0.0, 0.0);
+}
+
+vec4 vxr_transfer(int channel, float x) { return vxr_transfer_table(transfer_tex, channel, x); }
+
+// A ray's state between passes, one channel: EA and emission keep colour and
+// optical depth, MIP the largest windowed value.
+vec4 pack_ray(VxrRay r) {
+  if (VXR_SC_MODEL == VXR_MODEL_MIP) return vec4(r.reduce.x, r.reduce_depth.x, r.count, 0.0);
+  return vec4(r.acc[0].rgb, r.tau.x);
+}
+
+VxrRay unpack_ray(vec4 v) {
+  VxrRay r = vxr_begin(P);
+  if (VXR_SC_MODEL == VXR_MODEL_MIP) {
+    r.reduce.x = v.x;
+    r.reduce_depth.x = v.y;
+    r.count = v.z;
+  } else {
+    r.acc[0].rgb = v.rgb;
+    r.tau.x = v.a;
+    r.trans = exp(-r.tau.x);
+    r.done = VXR_SC_MODEL == VXR_MODEL_EMISSION_ABSORPTION && r.trans <= P.march.z;
+  }
+  return r;
+}
 
 // The ray's segment [t0, t1) inside brick b (its clip box and cut plane), in
 // t units (level-0 voxels along dir). False when it misses.
@@ -52,7 +89,8 @@ bool segment(uint b, vec3 dir, out float t0, out float t1) {
 
 void main() {
   const uint flags = p.pass.z;
-  uvec2 pix = gl_GlobalInvocationID.xy + p.pass.xy;
+  const uint width = P.control.y, height = P.control.z;
+  uvec2 pix = gl_GlobalInvocationID.xy;
   uint first = p.control.z, last = p.control.z + p.control.w;
   const bool item_mode = (flags & VXR_BRICK_WORK_ITEMS) != 0u;
   if (item_mode) {
@@ -61,19 +99,18 @@ void main() {
     first = item.x;
     last = item.x + 1u;
   }
-  if (pix.x >= p.control.x || pix.y >= p.control.y) return;
-  const bool mip = p.pass.w == VXR_MODEL_MIP;
+  if (pix.x >= width || pix.y >= height) return;
 
-  vec2 ndc = (vec2(pix) + 0.5) / vec2(p.control.xy) * 2.0 - 1.0;
-  vec3 dir = normalize(p.forward.xyz + ndc.x * p.right.xyz - ndc.y * p.up.xyz);
+  vec2 ndc = (vec2(pix) + 0.5) / vec2(width, height) * 2.0 - 1.0;
+  vec3 dir = normalize(P.forward.xyz + ndc.x * P.right.xyz - ndc.y * P.up.xyz);
 
   float t0, t1;
   // A work item's pixel that misses its brick leaves the accumulation alone.
   if (item_mode && !segment(first, dir, t0, t1)) return;
 
-  vec4 acc = vec4(0.0);  // premultiplied colour + alpha; for MIP, a = the largest windowed value
-  if ((flags & VXR_BRICK_LOAD_ACCUM) != 0u) acc = imageLoad(accum_image, ivec2(pix));
-  if (item_mode && !mip && acc.a >= 0.995) return;  // terminated earlier: nothing to add
+  VxrRay ray = vxr_begin(P);
+  if ((flags & VXR_BRICK_LOAD_ACCUM) != 0u) ray = unpack_ray(imageLoad(accum_image, ivec2(pix)));
+  if (item_mode && ray.done) return;  // terminated earlier: nothing to add
   uint taken = 0u;
 
   const bool tile_lists = (flags & VXR_BRICK_TILE_LISTS) != 0u;
@@ -82,32 +119,19 @@ void main() {
     first = list.x;
     last = list.x + list.y;
   }
-  for (uint j = first; j < last; ++j) {
-    if (!mip && acc.a >= 0.995) break;  // early ray termination
+  for (uint j = first; j < last && !ray.done; ++j) {
     const uint b = tile_lists ? items[j].x : j;
     if (!item_mode && !segment(b, dir, t0, t1)) continue;
     const vec3 e = bricks[b].eye.xyz;
-    const vec3 origin = bricks[b].atlas.xyz;
+    g_atlas_origin = bricks[b].atlas.xyz;
     const vec3 dl = dir * bricks[b].scale.xyz;
-    const float dt = p.shading.x / length(dl);  // one local step, in t units
+    const float dt = P.march.x / length(dl);  // one local step, in t units
     const float i0 = ceil(t0 / dt - 0.5);
     const int n = int(ceil(t1 / dt - 0.5) - i0);
-    for (int k = 0; k < n; ++k) {
-      const float t = (i0 + float(k) + 0.5) * dt;  // from the index: no drift
-      const vec3 pos = e + t * dl;
-      const float v = windowed(textureLod(atlas_tex, (origin + pos) * p.atlas_inv.xyz, 0.0).r);
+    for (int k = 0; k < n && !ray.done; ++k) {
+      // From the index: no drift. The segment is dt level-0 voxels long.
+      vxr_step(ray, P, e, dl, (i0 + float(k) + 0.5) * dt, dt);
       ++taken;
-      if (mip) {
-        acc.a = max(acc.a, v);
-      } else {
-        const vec4 tf = textureLod(transfer_tex, vec2(v, 0.5), 0.0);
-        const float tau = tf.a * p.shading.w * dt;
-        // 1 - exp(-tau), with the series for small tau so faint tissue survives float32.
-        const float a = tau < 1e-3 ? tau * (1.0 - 0.5 * tau) : 1.0 - exp(-tau);
-        acc.rgb += (1.0 - acc.a) * a * tf.rgb;
-        acc.a += (1.0 - acc.a) * a;
-        if (acc.a >= 0.995) break;
-      }
     }
   }
 
@@ -117,10 +141,6 @@ void main() {
     const uint old = atomicAdd(samples_lo, total);
     if (old + total < old) atomicAdd(samples_hi, 1u);
   }
-  if ((flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), acc);
-  if ((flags & VXR_BRICK_STORE_FINAL) != 0u) {
-    vec4 result = acc;
-    if (mip) result = vec4(textureLod(transfer_tex, vec2(acc.a, 0.5), 0.0).rgb * acc.a, acc.a);
-    imageStore(out_image, ivec2(pix), result);
-  }
+  if ((flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), pack_ray(ray));
+  if ((flags & VXR_BRICK_STORE_FINAL) != 0u) imageStore(out_image, ivec2(pix), vxr_finish(ray, P, vec3(0.0), dir));
 }

@@ -97,11 +97,19 @@ Result<std::unique_ptr<Raycaster>> Raycaster::create(gpu::Context& ctx) {
 Result<const gpu::ComputePipeline*> Raycaster::pipeline_for(RenderPath path, const RaycastSetup& r) {
   const uint32_t model = pack_params(r, false).control.x;
   const bool depth = r.depth_mode != DepthColorMode::kOff;
+  bool gamma = false;
+  for (uint32_t c = 0; c < r.channels && c < VXR_MAX_CHANNELS; ++c) gamma = gamma || r.window[c].z != 1.0;
+  const bool naive = !r.opacity_correction;
   const uint32_t key = (path == RenderPath::kFragment ? 1u : 0u) | (model << 1) | (r.channels << 4) |
-                       (r.gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u);
+                       (r.gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u) | (gamma ? 1u << 10 : 0u) |
+                       (naive ? 1u << 11 : 0u);
   if (auto it = pipelines_.find(key); it != pipelines_.end()) return &it->second;
-  const std::vector<gpu::SpecializationConstant> spec = {
-      {100, model}, {101, r.channels}, {102, r.gradient ? 1u : 0u}, {103, depth ? 1u : 0u}};
+  const std::vector<gpu::SpecializationConstant> spec = {{100, model},
+                                                         {101, r.channels},
+                                                         {102, r.gradient ? 1u : 0u},
+                                                         {103, depth ? 1u : 0u},
+                                                         {104, gamma ? 1u : 0u},
+                                                         {105, naive ? 1u : 0u}};
   gpu::ComputePipeline p;
   if (path == RenderPath::kCompute) {
     VXR_ASSIGN_OR_RETURN(p, gpu::create_compute_pipeline(ctx_, {"raycast.comp", raycast_bindings(), 0, spec}));

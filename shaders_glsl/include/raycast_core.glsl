@@ -32,6 +32,11 @@ layout(constant_id = 100) const uint VXR_SC_MODEL = 0;            // control.x
 layout(constant_id = 101) const int VXR_SC_CHANNELS = 1;          // dims.w
 layout(constant_id = 102) const bool VXR_SC_GRADIENT = false;     // gradient.x != 0
 layout(constant_id = 103) const bool VXR_SC_DEPTH_COLOR = false;  // depth.x != OFF
+// Off: no channel has a gamma other than 1 / the exact opacity is used. They
+// only remove work (the pow, the log), never change a result; the default
+// (unspecialised) is the general path.
+layout(constant_id = 104) const bool VXR_SC_GAMMA = true;          // some window[c].z != 1
+layout(constant_id = 105) const bool VXR_SC_NAIVE_OPACITY = true;  // control2.z != 0
 
 // Table lookup with the interpolation done here (texelFetch + mix), so the CPU
 // reference can repeat it exactly: entry i sits at x = i / (VXR_TF_SIZE - 1).
@@ -67,16 +72,21 @@ float vxr_opacity(float tau) { return tau < 1e-3 ? tau * (1.0 - 0.5 * tau) : 1.0
 // optical depth with that opacity, so the compositing below is unchanged.
 // Only `vxr bench accuracy` uses it, to show what the exact form buys.
 float vxr_segment_depth(RaycastParams P, float tau) {
+  if (!VXR_SC_NAIVE_OPACITY) return tau;
   return P.control2.z == 0u ? tau : -log(max(1.0 - min(tau, 1.0), 1e-30));
 }
 
-// Window (lo..hi -> 0..1, clamped) then gamma, per channel.
+// Window (lo..hi -> 0..1, clamped) then gamma, per channel. Channels past
+// the volume's count stay 0 (nothing reads them).
 vec4 vxr_normalise(RaycastParams P, vec4 raw) {
-  vec4 x;
-  for (int c = 0; c < VXR_MAX_CHANNELS; ++c) {
+  vec4 x = vec4(0.0);
+  for (int c = 0; c < VXR_SC_CHANNELS; ++c) {
     vec4 w = P.window[c];
     float v = clamp((raw[c] - w.x) / (w.y - w.x), 0.0, 1.0);
-    x[c] = w.z == 1.0 ? v : pow(v, w.z);
+    if (VXR_SC_GAMMA) {
+      if (w.z != 1.0) v = pow(v, w.z);
+    }
+    x[c] = v;
   }
   return x;
 }
@@ -109,6 +119,7 @@ struct VxrRay {
   float prev_value;            // isosurface: previous value of the iso channel (< 0: none yet)
   float prev_t;
   float hit_t;                 // isosurface: ray parameter of the first crossing (< 0: none)
+  float trans;                 // one channel, additive EA: exp(-tau.x), kept from the last termination test
   bool done;                   // early termination or surface found
 };
 
@@ -125,6 +136,7 @@ VxrRay vxr_begin(RaycastParams P) {
   r.prev_value = -1.0;
   r.prev_t = 0.0;
   r.hit_t = -1.0;
+  r.trans = 1.0;
   r.done = false;
   return r;
 }
@@ -186,7 +198,9 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
       r.acc[c].rgb += color * tau;
     } else if (P.control2.x == VXR_BLEND_ADDITIVE) {
       tau = vxr_segment_depth(P, tau);
-      r.acc[c].rgb += exp(-r.tau[c]) * vxr_opacity(tau) * color;
+      // One channel: exp(-tau so far) is what the last step's termination test computed.
+      const float trans = n == 1 ? r.trans : exp(-r.tau[c]);
+      r.acc[c].rgb += trans * vxr_opacity(tau) * color;
       r.tau[c] += tau;
     } else {
       mix_color += tau * color;
@@ -204,7 +218,8 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
     float tmin = 1e30;
     for (int c = 0; c < n; ++c)
       if (P.window[c].w != 0.0) tmin = min(tmin, r.tau[c]);
-    r.done = exp(-tmin) <= P.march.z;  // every channel is (nearly) opaque
+    r.trans = exp(-tmin);  // one channel: exp(-tau.x), reused by the next step
+    r.done = r.trans <= P.march.z;  // every channel is (nearly) opaque
   }
 }
 

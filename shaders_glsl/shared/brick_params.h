@@ -30,19 +30,19 @@ struct BrickRecord {
   vec4 plane;   // cut plane in local voxels: keep dot(xyz, p) + w >= 0; xyz = 0: none
 };
 
+// Push constants: which bricks or work items a dispatch marches. Everything
+// else a ray needs (directions, image size, step, extinction, windows,
+// optical model) is the dense ray caster's RaycastParams (uniform buffer,
+// binding 7), filled by the same plan_raycast/pack_params.
 struct BrickCastParams {
-  vec4 forward;    // xyz: ray direction through the image centre, level-0 voxel space
-  vec4 right;      // xyz: +x of the image at unit distance
-  vec4 up;         // xyz: +y of the image at unit distance
-  vec4 shading;    // x: step (local voxels), y/z: window lo/hi (0..1 texel units), w: extinction per level-0 voxel
-  uvec4 control;   // x: image width, y: image height, z: first brick, w: brick count
-  uvec4 pass;      // xy: pixel offset of this dispatch (work-item base in x with VXR_BRICK_WORK_ITEMS), z: flags, w: optical model
+  uvec4 control;   // z: first brick, w: brick count (single pass); x, y unused
+  uvec4 pass;      // x: work-item base with VXR_BRICK_WORK_ITEMS, z: flags
   vec4 atlas_inv;  // xyz: 1 / atlas size in texels
 };
 
 #ifdef __cplusplus
 static_assert(sizeof(BrickRecord) == 96, "brick record layout");
-static_assert(sizeof(BrickCastParams) == 112, "push constants must stay within 128 bytes");
+static_assert(sizeof(BrickCastParams) == 48, "push constants must stay within 128 bytes");
 }  // namespace vxr::shader
 #endif
 

@@ -7,7 +7,7 @@
 #include <cstring>
 
 #include "core/trace.h"
-#include "render/colormap.h"
+#include "render/raycast_setup.h"
 #include "shared/brick_params.h"
 #include "shared/raycast_params.h"
 
@@ -23,6 +23,7 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {7, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
   };
 }
 
@@ -64,24 +65,40 @@ std::string format_stats(const BrickFrameStats& s) {
 Status check_brick_settings(const RenderSettings& s) {
   auto no = [](const std::string& what) {
     return invalid_argument("render settings: " + what +
-                            " is not drawn by the out-of-core renderer (one channel, ea or mip, window and colormap); "
+                            " is not drawn by the out-of-core renderer (one channel; ea, emission or mip); "
                             "use the dense renderer (vxr render --renderer dense)");
   };
-  if (s.model != OpticalModel::kEmissionAbsorption && s.model != OpticalModel::kMip)
+  if (s.model != OpticalModel::kEmissionAbsorption && s.model != OpticalModel::kEmission &&
+      s.model != OpticalModel::kMip)
     return no(std::string("model '") + optical_model_name(s.model) + "'");
   if (s.channels.empty()) return invalid_argument("render settings: no channel settings");
-  const ChannelSettings& c = s.channels[0];
-  if (!c.color_points.empty()) return no("'color_points'");
-  if (!c.opacity_points.empty()) return no("'opacity_points'");
-  if (c.gamma != 1.0) return no("'gamma' " + std::to_string(c.gamma));
   if (s.gradient_opacity.enabled) return no("'gradient_opacity'");
   if (s.depth_color != DepthColorMode::kOff) return no("'depth_color'");
   if (s.jitter) return no("'jitter'");
   if (s.sample_offset != 0.5) return no("'sample_offset' " + std::to_string(s.sample_offset));
-  if (!s.opacity_correction) return no("'opacity_correction' false");
   for (size_t i = 1; i < s.channels.size(); ++i)
     if (s.channels[i].enabled) return no("a second channel");
-  return Status::ok();
+  return validate_render_settings(s, 1);
+}
+
+bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, double lo, double hi) {
+  const ChannelSettings& c = s.channels[0];
+  auto windowed = [&](double v) {
+    const double x = std::clamp((v - c.window_lo) / (c.window_hi - c.window_lo), 0.0, 1.0);
+    return c.gamma == 1.0 ? x : std::pow(x, c.gamma);
+  };
+  const double x0 = windowed(lo), x1 = windowed(hi);  // monotonic: the range's image
+  // MIP: values at windowed 0 never raise the running maximum, but a ray that
+  // took samples shows the table at its maximum, and one that took none shows
+  // nothing: the two agree only where entry 0 has zero opacity.
+  if (s.model == OpticalModel::kMip) return x1 > 0.0 || table.at(0, 0).a > 0.0;
+  if (s.model != OpticalModel::kEmissionAbsorption && s.model != OpticalModel::kEmission) return true;
+  // vxr_transfer_table mixes entries floor(u) and floor(u) + 1, u = x * 255.
+  const int n = VXR_TF_SIZE - 1;
+  const int i0 = std::clamp(int(std::floor(x0 * n)), 0, n), i1 = std::clamp(int(std::ceil(x1 * n)), 0, n);
+  for (int i = i0; i <= i1; ++i)
+    if (table.at(0, i).a > 0.0) return true;
+  return false;
 }
 
 Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, const ChunkSource& source,
@@ -93,13 +110,14 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->pool_, BrickPool::create(ctx, source, options.pool));
   const auto b = bindings();
   VXR_ASSIGN_OR_RETURN(r->pipeline_,
-                       gpu::create_compute_pipeline(ctx, {"brick_raycast.comp", b, sizeof(shader::BrickCastParams), {}}));
+                       gpu::create_compute_pipeline(ctx, {"brick_raycast.comp", b, sizeof(shader::BrickCastParams),
+                                                          {{100, VXR_MODEL_EMISSION_ABSORPTION}, {104, 0}, {105, 0}}}));
   VXR_ASSIGN_OR_RETURN(r->desc_pool_, gpu::create_descriptor_pool(ctx, b, 2));
   VXR_ASSIGN_OR_RETURN(r->paged_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_.set_layout));
   VXR_ASSIGN_OR_RETURN(r->mono_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_.set_layout));
   VXR_ASSIGN_OR_RETURN(r->linear_, gpu::create_linear_clamp_sampler(ctx));
   VXR_ASSIGN_OR_RETURN(r->transfer_tex_,
-                       gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT, {256, 1, 1},
+                       gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT, {VXR_TF_SIZE, VXR_MAX_CHANNELS, 1},
                                                VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                                                "transfer function"}));
   VXR_ASSIGN_OR_RETURN(r->table_, gpu::create_buffer(ctx, {uint64_t(options.max_bricks) * sizeof(shader::BrickRecord),
@@ -110,11 +128,16 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->items_, gpu::create_buffer(ctx, {uint64_t(options.max_work_items) * sizeof(glm::uvec4),
                                                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                            gpu::MemoryIntent::kUpload, "brick work items"}));
+  VXR_ASSIGN_OR_RETURN(r->params_, gpu::create_buffer(ctx, {sizeof(shader::RaycastParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                                            gpu::MemoryIntent::kUpload, "brick raycast params"}));
   gpu::write_combined_image(ctx, r->paged_set_, 0, r->pool_->atlas().view, r->linear_);
   for (VkDescriptorSet set : {r->paged_set_, r->mono_set_}) {
     gpu::write_storage_buffer(ctx, set, 4, r->table_.buffer);
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
     gpu::write_storage_buffer(ctx, set, 6, r->items_.buffer);
+    gpu::write_uniform_buffer(ctx, set, 7, r->params_.buffer);
+    // The core reads the table with texelFetch: the sampler's filter is unused.
+    gpu::write_combined_image(ctx, set, 1, r->transfer_tex_.view, r->linear_);
   }
   VXR_RETURN_IF_ERROR(r->pool_->pin_top_level());
   return r;
@@ -151,17 +174,26 @@ Status BrickRenderer::ensure_target(uint32_t width, uint32_t height) {
   return Status::ok();
 }
 
-Status BrickRenderer::upload_transfer(const RenderSettings& s) {
-  if (s.channels[0].colormap == tf_key_) return Status::ok();
-  auto cmap = find_colormap(s.channels[0].colormap);
-  if (!cmap) return invalid_argument("unknown colormap '" + s.channels[0].colormap + "'");
-  std::vector<glm::vec4> table(256);
-  for (int i = 0; i < 256; ++i) table[i] = glm::vec4((*cmap)[i], static_cast<float>(i) / 255.0f);
-  VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, transfer_tex_, table.data(), table.size() * sizeof(glm::vec4)));
-  for (VkDescriptorSet set : {paged_set_, mono_set_})
-    gpu::write_combined_image(ctx_, set, 1, transfer_tex_.view, linear_);
-  tf_key_ = s.channels[0].colormap;
+Status BrickRenderer::upload_transfer(const TransferTable& table) {
+  if (table.rgba == tf_uploaded_) return Status::ok();
+  VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, transfer_tex_, table.rgba.data(), table.rgba.size() * sizeof(glm::vec4)));
+  tf_uploaded_ = table.rgba;
   return Status::ok();
+}
+
+Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s) {
+  const uint32_t model = s.model == OpticalModel::kMip        ? VXR_MODEL_MIP
+                         : s.model == OpticalModel::kEmission ? VXR_MODEL_EMISSION
+                                                              : VXR_MODEL_EMISSION_ABSORPTION;
+  // Specialised like the dense ray caster's (raycast_core.glsl ids 100..105).
+  const bool gamma = s.channels[0].gamma != 1.0, naive = !s.opacity_correction;
+  if (model == VXR_MODEL_EMISSION_ABSORPTION && !gamma && !naive) return &pipeline_;
+  const uint32_t key = model | (gamma ? 1u << 4 : 0u) | (naive ? 1u << 5 : 0u);
+  if (auto it = pipelines_.find(key); it != pipelines_.end()) return &it->second;
+  VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p,
+                       gpu::create_compute_pipeline(ctx_, {"brick_raycast.comp", bindings(), sizeof(shader::BrickCastParams),
+                                                           {{100, model}, {104, gamma ? 1u : 0u}, {105, naive ? 1u : 0u}}}));
+  return &pipelines_.emplace(key, std::move(p)).first->second;
 }
 
 void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
@@ -190,30 +222,26 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
   std::memcpy(out, &r, sizeof(r));
 }
 
-Result<double> BrickRenderer::cast(VkDescriptorSet set, const LodView& view, const RenderSettings& s,
+Result<double> BrickRenderer::cast(VkDescriptorSet set, const RenderSettings& s, const shader::RaycastParams& params,
                                    uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
                                    const std::vector<glm::uvec2>& waves, BrickFrameStats* stats) {
+  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s));
+  std::memcpy(params_.mapped, &params, sizeof(params));
   shader::BrickCastParams p{};
-  p.forward = v4(view.forward);
-  p.right = v4(view.right);
-  p.up = v4(view.up);
-  p.shading = glm::vec4(static_cast<float>(s.step_voxels), static_cast<float>(s.channels[0].window_lo / value_scale_),
-                        static_cast<float>(s.channels[0].window_hi / value_scale_), static_cast<float>(s.density));
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z, 0.0f);
-  const uint32_t model = s.model == OpticalModel::kMip ? VXR_MODEL_MIP : VXR_MODEL_EMISSION_ABSORPTION;
-  const uint32_t w = view.width, h = view.height;
+  const uint32_t w = params.control.y, h = params.control.z;
   std::memset(counters_.mapped, 0, 16);
   uint32_t dispatches = 0;
   const auto t0 = std::chrono::steady_clock::now();
   VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
     gpu::transition_image(cmd, target_, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
                           VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.pipeline);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout, 0, 1, &set, 0, nullptr);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->pipeline);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set, 0, nullptr);
     auto dispatch = [&](uint32_t first, uint32_t count, uint32_t flags) {
-      p.control = glm::uvec4(w, h, first, count);
-      p.pass = glm::uvec4(0, 0, flags, model);
-      vkCmdPushConstants(cmd, pipeline_.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+      p.control = glm::uvec4(0, 0, first, count);
+      p.pass = glm::uvec4(0, 0, flags, 0);
+      vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
       vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
       ++dispatches;
     };
@@ -227,10 +255,9 @@ Result<double> BrickRenderer::cast(VkDescriptorSet set, const LodView& view, con
       for (const glm::uvec2& wave : waves) {
         compute_barrier(cmd);  // a wave continues rays the previous one wrote
         for (uint32_t done = 0; done < wave.y; done += max_groups) {
-          p.control = glm::uvec4(w, h, 0, 0);
-          p.pass = glm::uvec4(wave.x + done, 0, VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM,
-                              model);
-          vkCmdPushConstants(cmd, pipeline_.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+          p.control = glm::uvec4(0, 0, 0, 0);
+          p.pass = glm::uvec4(wave.x + done, 0, VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM, 0);
+          vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
           vkCmdDispatch(cmd, std::min(max_groups, wave.y - done), 1, 1);
           ++dispatches;
         }
@@ -378,17 +405,16 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
   if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
   if (!(s.step_voxels > 0.0)) return invalid_argument("render: step must be > 0 voxels");
   VXR_RETURN_IF_ERROR(check_brick_settings(s));
-  if (!(s.channels[0].window_hi > s.channels[0].window_lo)) return invalid_argument("render: window lo must be below hi");
   VXR_RETURN_IF_ERROR(ensure_target(width, height));
-  VXR_RETURN_IF_ERROR(upload_transfer(s));
+  const TransferTable tf = build_transfer_table(s);
+  VXR_RETURN_IF_ERROR(upload_transfer(tf));
   BrickFrameStats st;
   pool_->begin_frame();
   const LodView view = view_for(camera, width, height);
 
   auto t0 = std::chrono::steady_clock::now();
   LodQueries q;
-  const double lo = s.channels[0].window_lo;
-  q.visible = [lo](double, double hi) { return hi > lo; };  // the ramp is zero at and below the window's low end
+  q.visible = [&](double lo, double hi) { return brick_may_contribute(s, tf, lo, hi); };
   q.resident = [this](const ChunkKey& k) { return pool_->resident(k); };
   LodResult lod = traverse_lod(src_, view, frame.lod, q);
   st.traverse_ms = ms_since(t0);
@@ -411,7 +437,9 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;
   st.hit_rate = wanted ? double(lod.stats.drawn - lod.stats.fallback) / double(wanted) : 1.0;
 
-  VXR_RETURN_IF_ERROR(cast(paged_set_, view, s, static_cast<uint32_t>(lod.draw.size()), pool_->atlas_texels(),
+  const double scale[1] = {value_scale_};
+  const shader::RaycastParams params = pack_params(plan_raycast(camera, s, placement(), scale, width, height), false);
+  VXR_RETURN_IF_ERROR(cast(paged_set_, s, params, static_cast<uint32_t>(lod.draw.size()), pool_->atlas_texels(),
                            frame.mode, waves, &st)
                           .status());
   // Uploads after the frame's rays: what arrives is drawn from the next frame on.
@@ -468,8 +496,9 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
                                                     BrickFrameStats* stats_out) {
   VXR_TRACE_SCOPE("brick_renderer.render_monolithic");
   if (mono_level_ == UINT32_MAX) return invalid_argument("render_monolithic: call set_monolithic first");
+  VXR_RETURN_IF_ERROR(check_brick_settings(s));
   VXR_RETURN_IF_ERROR(ensure_target(width, height));
-  VXR_RETURN_IF_ERROR(upload_transfer(s));
+  VXR_RETURN_IF_ERROR(upload_transfer(build_transfer_table(s)));
   const LodView view = view_for(camera, width, height);
   // One "brick": the whole level, local origin at voxel 0, no apron (the
   // sampler's clamp-to-edge repeats the border voxels like an apron would).
@@ -496,7 +525,9 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
   std::memcpy(table_.mapped, &r, sizeof(r));
   BrickFrameStats st;
   st.lod.drawn = 1;
-  VXR_RETURN_IF_ERROR(cast(mono_set_, view, s, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
+  const double scale[1] = {value_scale_};
+  const shader::RaycastParams params = pack_params(plan_raycast(camera, s, placement(), scale, width, height), false);
+  VXR_RETURN_IF_ERROR(cast(mono_set_, s, params, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
                            BrickPassMode::kSinglePass, {}, &st)
                           .status());
   ImageRgba8 img(width, height);

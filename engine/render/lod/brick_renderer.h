@@ -18,8 +18,13 @@
 //
 // render_monolithic() is the comparison path: one level of the source as a
 // single 3D texture, drawn by the same shader as one brick.
+//
+// Classification and compositing are the dense ray caster's GLSL core
+// (shaders_glsl/include/raycast_core.glsl) with the same RaycastParams and
+// transfer table; see check_brick_settings for what the brick path draws.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <tuple>
 #include <vector>
@@ -33,6 +38,8 @@
 #include "render/lod/brick_pool.h"
 #include "render/lod/lod_traversal.h"
 #include "render/raycaster.h"
+#include "render/transfer_function.h"
+#include "shared/raycast_params.h"
 
 namespace vxr {
 
@@ -62,11 +69,24 @@ struct BrickFrameStats {
   double render_ms = 0.0;        // ray-cast submission, wall clock
 };
 
-// The brick shader draws one channel with emission-absorption or MIP, a
-// window and a colour map (opacity = the windowed value), at a fixed sample
-// offset of 0.5. Anything else in `s` would be silently ignored, so it is
-// refused: kInvalidArgument naming the setting.
+// The brick shader classifies and composites with the dense ray caster's
+// core (raycast_core.glsl): one channel, emission-absorption, emission or
+// MIP, any transfer function (window, gamma, colormap or colour points,
+// opacity points), samples at segment midpoints. What it cannot do (other
+// models, more channels, gradient opacity, depth colour, jitter, another
+// sample offset) is refused, kInvalidArgument naming the setting, rather than
+// silently ignored.
 Status check_brick_settings(const RenderSettings& s);
+
+// Empty-space test for a brick whose payload values (data units, apron
+// included) lie in [lo, hi], given the settings and their transfer table:
+// false only when skipping the brick cannot change any pixel. EA and
+// emission: every table entry the interpolation can reach over the windowed
+// range has zero opacity (gradient opacity would only scale it down). MIP:
+// the whole range is at or below the window's low end (windowed value 0 never
+// raises the running maximum) and the table's entry 0 has zero opacity (else
+// a ray whose every brick was skipped would lose the colour of value 0).
+bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, double lo, double hi);
 
 // "visited 123 drawn 45 (fallback 2) empty 30 culled 12 missing 3 samples 1.2M uploaded 0.4 MiB hit 97%"
 std::string format_stats(const BrickFrameStats& s);
@@ -93,11 +113,14 @@ class BrickRenderer {
  private:
   BrickRenderer(gpu::Context& ctx, const ChunkSource& src) : ctx_(ctx), src_(src) {}
   Status ensure_target(uint32_t width, uint32_t height);
-  Status upload_transfer(const RenderSettings& settings);
+  Status upload_transfer(const TransferTable& table);
+  // The pipeline specialised for the settings' optical model.
+  Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in texels).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
                    const LodSettings& clip) const;
-  Result<double> cast(VkDescriptorSet set, const LodView& view, const RenderSettings& s, uint32_t bricks,
+  Result<double> cast(VkDescriptorSet set, const RenderSettings& s, const shader::RaycastParams& params,
+                      uint32_t bricks,
                       const glm::uvec3& atlas_texels, BrickPassMode mode, const std::vector<glm::uvec2>& waves,
                       BrickFrameStats* stats);
   // Multipass work items (brick, 8x8 tile) grouped into waves; returns (first item, count) per wave.
@@ -110,13 +133,14 @@ class BrickRenderer {
   const ChunkSource& src_;
   BrickRendererOptions opt_;
   std::unique_ptr<BrickPool> pool_;
-  gpu::ComputePipeline pipeline_;
+  gpu::ComputePipeline pipeline_;  // emission-absorption; its set layout is the sets'
+  std::map<uint32_t, gpu::ComputePipeline> pipelines_;  // other variants: model | gamma << 4 | naive << 5
   gpu::Handle<VkDescriptorPool> desc_pool_;
   VkDescriptorSet paged_set_ = VK_NULL_HANDLE, mono_set_ = VK_NULL_HANDLE;
   gpu::Handle<VkSampler> linear_;
   gpu::Image transfer_tex_, target_, accum_, mono_tex_;
-  gpu::Buffer table_, counters_, items_;
-  std::string tf_key_;
+  gpu::Buffer table_, counters_, items_, params_;
+  std::vector<glm::vec4> tf_uploaded_;
   uint32_t mono_level_ = UINT32_MAX;
   std::vector<glm::dvec3> ray_dirs_;  // per pixel 1/direction, for build_waves
   std::tuple<glm::dvec3, glm::dvec3, glm::dvec3> rays_for_;
