@@ -35,23 +35,8 @@ DenseVolume mri() {
   return std::move(v).value();
 }
 
-// Length (voxels) of pixel (x, y)'s ray inside the box [0, box), by the
-// double slab test; 0 when it misses.
 double path_in_box(const VoxelSpaceRays& r, uint32_t w, uint32_t h, uint32_t x, uint32_t y, const glm::dvec3& box) {
-  const double nx = (2.0 * x + 1.0 - w) / w, ny = (2.0 * y + 1.0 - h) / h;
-  const glm::dvec3 d = glm::normalize(r.forward + nx * r.right - ny * r.up);
-  double t0 = 0.0, t1 = 1e300;
-  for (int k = 0; k < 3; ++k) {
-    if (d[k] == 0.0) {
-      if (!(r.eye[k] >= 0.0 && r.eye[k] < box[k])) return 0.0;
-      continue;
-    }
-    double ta = (0.0 - r.eye[k]) / d[k], tb = (box[k] - r.eye[k]) / d[k];
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-  }
-  return std::max(0.0, t1 - t0);
+  return length_in_box(r.eye, pixel_ray(r, w, h, x, y), box);
 }
 
 // A camera on a line where two coordinate planes meet (`b_at`, `c_at` in

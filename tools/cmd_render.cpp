@@ -104,32 +104,6 @@ Result<std::string> read_text(const std::string& path) {
   return ss.str();
 }
 
-// Samples the dense ray caster marches without early termination: per pixel,
-// the ray's length inside the volume box over the step (its segments).
-uint64_t dense_sample_bound(const Camera& camera, const VolumePlacement& placement, double step, uint32_t width,
-                            uint32_t height) {
-  const VoxelSpaceRays r = rays_in_voxel_space(camera, placement, width, height);
-  const glm::dvec3 hi(placement.dims[0], placement.dims[1], placement.dims[2]);
-  uint64_t n = 0;
-  for (uint32_t y = 0; y < height; ++y)
-    for (uint32_t x = 0; x < width; ++x) {
-      const double nx = (2.0 * x + 1.0 - width) / width, ny = (2.0 * y + 1.0 - height) / height;
-      const glm::dvec3 d = glm::normalize(r.forward + nx * r.right - ny * r.up);
-      double t0 = 0.0, t1 = 1e300;
-      for (int a = 0; a < 3; ++a) {
-        if (d[a] == 0.0) {
-          if (r.eye[a] < 0.0 || r.eye[a] > hi[a]) t1 = -1.0;
-          continue;
-        }
-        const double ta = (0.0 - r.eye[a]) / d[a], tb = (hi[a] - r.eye[a]) / d[a];
-        t0 = std::max(t0, std::min(ta, tb));
-        t1 = std::min(t1, std::max(ta, tb));
-      }
-      if (t1 > t0) n += uint64_t(std::ceil((t1 - t0) / step));
-    }
-  return n;
-}
-
 using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 
 // The out-of-core path: a .vxc container or a procedural source through the
@@ -399,7 +373,7 @@ int run(const Options& o) {
   if (o.stats) {
     // The dense renderer keeps no counters: the samples are counted here from
     // the rays (slab test per pixel), before early termination.
-    const uint64_t n = dense_sample_bound(camera, placement, s.step_voxels, width, height);
+    const uint64_t n = dense_sample_count(camera, placement, s.step_voxels, width, height);
     std::printf("stats: renderer dense, shrink %u, samples <= %llu (before early termination), %.1f ms\n",
                 loaded->shrink, (unsigned long long)n, ms);
   }

@@ -1,5 +1,6 @@
 #include "render/camera.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace vxr {
@@ -48,6 +49,37 @@ VoxelSpaceRays rays_in_voxel_space(const Camera& c, const VolumePlacement& v, ui
   // Directions are mapped linearly, so a pixel's ray maps exactly into voxel space.
   return {v.world_to_voxel_point(c.eye), v.world_to_voxel_vector(f), v.world_to_voxel_vector(r * tx),
           v.world_to_voxel_vector(u * ty)};
+}
+
+glm::dvec3 pixel_ray(const VoxelSpaceRays& r, uint32_t width, uint32_t height, uint32_t x, uint32_t y) {
+  const double nx = (2.0 * x + 1.0 - width) / width, ny = (2.0 * y + 1.0 - height) / height;
+  return glm::normalize(r.forward + nx * r.right - ny * r.up);
+}
+
+double length_in_box(const glm::dvec3& eye, const glm::dvec3& dir, const glm::dvec3& dims) {
+  double t0 = 0.0, t1 = 1e300;
+  for (int a = 0; a < 3; ++a) {
+    if (dir[a] == 0.0) {
+      if (eye[a] < 0.0 || eye[a] > dims[a]) return 0.0;
+      continue;
+    }
+    const double ta = (0.0 - eye[a]) / dir[a], tb = (dims[a] - eye[a]) / dir[a];
+    t0 = std::max(t0, std::min(ta, tb));
+    t1 = std::min(t1, std::max(ta, tb));
+  }
+  return std::max(0.0, t1 - t0);
+}
+
+uint64_t dense_sample_count(const Camera& c, const VolumePlacement& v, double step, uint32_t width, uint32_t height) {
+  const VoxelSpaceRays r = rays_in_voxel_space(c, v, width, height);
+  const glm::dvec3 dims(v.dims[0], v.dims[1], v.dims[2]);
+  uint64_t n = 0;
+  for (uint32_t y = 0; y < height; ++y)
+    for (uint32_t x = 0; x < width; ++x) {
+      const double length = length_in_box(r.eye, pixel_ray(r, width, height, x, y), dims);
+      if (length > 0.0) n += static_cast<uint64_t>(std::ceil(length / step));
+    }
+  return n;
 }
 
 }  // namespace vxr

@@ -54,4 +54,16 @@ struct VoxelSpaceRays {
 };
 VoxelSpaceRays rays_in_voxel_space(const Camera& c, const VolumePlacement& v, uint32_t width, uint32_t height);
 
+// Pixel (x, y)'s unit ray direction in voxel space (pixel centres, top row
+// first: the same ndc as the ray caster, (2 x + 1 - width) / width).
+glm::dvec3 pixel_ray(const VoxelSpaceRays& r, uint32_t width, uint32_t height, uint32_t x, uint32_t y);
+
+// Length of the ray eye + t dir (t >= 0, dir unit) inside the box [0, dims],
+// by the slab test in double; 0 when it misses.
+double length_in_box(const glm::dvec3& eye, const glm::dvec3& dir, const glm::dvec3& dims);
+
+// Samples the dense ray caster takes at `step` voxels without early
+// termination: per pixel, ceil(length in the box / step).
+uint64_t dense_sample_count(const Camera& c, const VolumePlacement& v, double step, uint32_t width, uint32_t height);
+
 }  // namespace vxr

@@ -87,28 +87,8 @@ Camera view_camera(const DenseVolume& v, const View& view, uint32_t w, uint32_t 
   return c;
 }
 
-// Samples a ray caster takes with `step` and no early termination (the slab
-// test and sample count of raycast_core.glsl, in double).
 uint64_t count_samples(const Camera& cam, const DenseVolume& v, uint32_t w, uint32_t h, double step) {
-  const VolumePlacement p{v.dims, v.voxel_size};
-  const VoxelSpaceRays rays = rays_in_voxel_space(cam, p, w, h);
-  const glm::dvec3 box(v.dims[0], v.dims[1], v.dims[2]);
-  uint64_t total = 0;
-  for (uint32_t y = 0; y < h; ++y)
-    for (uint32_t x = 0; x < w; ++x) {
-      const double nx = (2.0 * x + 1.0 - w) / w, ny = (2.0 * y + 1.0 - h) / h;
-      const glm::dvec3 d = glm::normalize(rays.forward + nx * rays.right - ny * rays.up);
-      double t0 = 0.0, t1 = 1e300;
-      for (int a = 0; a < 3; ++a) {
-        if (d[a] == 0.0) continue;
-        double ta = (0.0 - rays.eye[a]) / d[a], tb = (box[a] - rays.eye[a]) / d[a];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-      }
-      if (t1 > t0) total += static_cast<uint64_t>(std::ceil((t1 - t0) / step));
-    }
-  return total;
+  return dense_sample_count(cam, VolumePlacement{v.dims, v.voxel_size}, step, w, h);
 }
 
 void accumulate_error(SceneResult& r, const ImageRgbaF& got, const ImageRgbaF& ref) {

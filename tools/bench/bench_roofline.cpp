@@ -8,31 +8,6 @@
 #include "roofline.h"
 
 namespace vxr::bench {
-namespace {
-
-// Samples the MIP caster takes for this view (MIP never terminates early), from
-// the same ray setup and slab test as the shader, in double.
-uint64_t count_mip_samples(const Camera& cam, const VolumePlacement& v, uint32_t w, uint32_t h, double step) {
-  const VoxelSpaceRays rays = rays_in_voxel_space(cam, v, w, h);
-  const glm::dvec3 box(v.dims[0], v.dims[1], v.dims[2]);
-  uint64_t total = 0;
-  for (uint32_t y = 0; y < h; ++y) {
-    for (uint32_t x = 0; x < w; ++x) {
-      const double nx = (x + 0.5) / w * 2.0 - 1.0, ny = (y + 0.5) / h * 2.0 - 1.0;
-      const glm::dvec3 d = glm::normalize(rays.forward + nx * rays.right - ny * rays.up);
-      double t0 = 0.0, t1 = 1e300;
-      for (int a = 0; a < 3; ++a) {
-        const double ta = (0.0 - rays.eye[a]) / d[a], tb = (box[a] - rays.eye[a]) / d[a];
-        t0 = std::max(t0, std::min(ta, tb));
-        t1 = std::min(t1, std::max(ta, tb));
-      }
-      if (t1 > t0) total += static_cast<uint64_t>(std::ceil((t1 - t0) / step));
-    }
-  }
-  return total;
-}
-
-}  // namespace
 
 void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
   auto* cmd = bench.add_subcommand("roofline",
@@ -67,7 +42,7 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
       Status err;
       const double ms = median_ms(opt->repeats, [&] { return (*caster)->render(cam, rs, 512, 512).status(); }, &err);
       if (!err.is_ok()) return cli::fail(err);
-      const uint64_t samples = count_mip_samples(cam, placement, 512, 512, rs.step_voxels);
+      const uint64_t samples = dense_sample_count(cam, placement, rs.step_voxels, 512, 512);  // MIP never terminates early
       const double rate = samples / (ms * 1e-3);
 
       nlohmann::json doc = {
