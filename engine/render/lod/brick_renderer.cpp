@@ -428,10 +428,13 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
     fill_record(static_cast<uint8_t*>(table_.mapped) + i * sizeof(shader::BrickRecord), lod.draw[i], glm::vec3(o),
                 view, frame.lod);
   }
+  const BrickPassMode mode = frame.mode != BrickPassMode::kAuto ? frame.mode
+                             : ctx_.info().is_cpu()             ? BrickPassMode::kMultipass
+                                                                : BrickPassMode::kTiled;
   std::vector<glm::uvec2> waves;
-  if (frame.mode == BrickPassMode::kMultipass) {
+  if (mode == BrickPassMode::kMultipass) {
     VXR_ASSIGN_OR_RETURN(waves, build_waves(lod.draw, view));
-  } else if (frame.mode == BrickPassMode::kTiled) {
+  } else if (mode == BrickPassMode::kTiled) {
     VXR_RETURN_IF_ERROR(build_tile_lists(lod.draw, view));
   }
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;
@@ -440,7 +443,7 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
   const double scale[1] = {value_scale_};
   const shader::RaycastParams params = pack_params(plan_raycast(camera, s, placement(), scale, width, height), false);
   VXR_RETURN_IF_ERROR(cast(paged_set_, s, params, static_cast<uint32_t>(lod.draw.size()), pool_->atlas_texels(),
-                           frame.mode, waves, &st)
+                           mode, waves, &st)
                           .status());
   // Uploads after the frame's rays: what arrives is drawn from the next frame on.
   if (!lod.requests.empty()) {
