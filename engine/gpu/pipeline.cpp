@@ -7,47 +7,65 @@
 
 namespace vxr::gpu {
 
-Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const ComputePipelineCreateInfo& info) {
-  VkDevice dev = ctx.device();
-  ComputePipeline p;
+namespace {
 
+// Set layout (set 0) and pipeline layout with an optional compute push-constant range.
+Status create_layouts(const Context& ctx, const std::vector<VkDescriptorSetLayoutBinding>& bindings,
+                      uint32_t push_constant_bytes, ComputePipeline& p) {
+  VkDevice dev = ctx.device();
   VkDescriptorSetLayoutCreateInfo dl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  dl.bindingCount = static_cast<uint32_t>(info.bindings.size());
-  dl.pBindings = info.bindings.data();
+  dl.bindingCount = static_cast<uint32_t>(bindings.size());
+  dl.pBindings = bindings.data();
   VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
   VXR_VK_TRY(vkCreateDescriptorSetLayout(dev, &dl, nullptr, &set_layout));
   p.set_layout = Handle<VkDescriptorSetLayout>(dev, set_layout);
 
-  VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, info.push_constant_bytes};
-  if (info.push_constant_bytes > ctx.limits().maxPushConstantsSize)
-    return out_of_range(std::string(info.shader) + ": push constants of " + std::to_string(info.push_constant_bytes) +
-                        " bytes exceed the device limit " + std::to_string(ctx.limits().maxPushConstantsSize));
+  VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes};
   VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
   pl.setLayoutCount = 1;
   pl.pSetLayouts = &set_layout;
-  pl.pushConstantRangeCount = info.push_constant_bytes ? 1 : 0;
+  pl.pushConstantRangeCount = push_constant_bytes ? 1 : 0;
   pl.pPushConstantRanges = &range;
   VkPipelineLayout layout = VK_NULL_HANDLE;
   VXR_VK_TRY(vkCreatePipelineLayout(dev, &pl, nullptr, &layout));
   p.layout = Handle<VkPipelineLayout>(dev, layout);
+  return Status::ok();
+}
 
-  VXR_ASSIGN_OR_RETURN(Handle<VkShaderModule> module, create_shader_module(ctx, info.shader));
-
+// 32-bit specialization constants packed back to back; info() is null when there are none.
+struct Specialization {
   std::vector<VkSpecializationMapEntry> entries;
   std::vector<uint32_t> values;
-  for (const auto& sc : info.specialization) {
-    entries.push_back({sc.id, static_cast<uint32_t>(values.size() * 4), 4});
-    values.push_back(sc.value);
+  VkSpecializationInfo vk{};
+  explicit Specialization(const std::vector<SpecializationConstant>& constants) {
+    for (const auto& sc : constants) {
+      entries.push_back({sc.id, static_cast<uint32_t>(values.size() * 4), 4});
+      values.push_back(sc.value);
+    }
+    vk = {static_cast<uint32_t>(entries.size()), entries.data(), values.size() * 4, values.data()};
   }
-  VkSpecializationInfo spec{static_cast<uint32_t>(entries.size()), entries.data(), values.size() * 4, values.data()};
+  const VkSpecializationInfo* info() const { return entries.empty() ? nullptr : &vk; }
+};
+
+}  // namespace
+
+Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const ComputePipelineCreateInfo& info) {
+  VkDevice dev = ctx.device();
+  if (info.push_constant_bytes > ctx.limits().maxPushConstantsSize)
+    return out_of_range(std::string(info.shader) + ": push constants of " + std::to_string(info.push_constant_bytes) +
+                        " bytes exceed the device limit " + std::to_string(ctx.limits().maxPushConstantsSize));
+  ComputePipeline p;
+  VXR_RETURN_IF_ERROR(create_layouts(ctx, info.bindings, info.push_constant_bytes, p));
+  VXR_ASSIGN_OR_RETURN(Handle<VkShaderModule> module, create_shader_module(ctx, info.shader));
+  const Specialization spec(info.specialization);
 
   VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
   ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
   ci.stage.module = module;
   ci.stage.pName = "main";
-  ci.stage.pSpecializationInfo = entries.empty() ? nullptr : &spec;
-  ci.layout = layout;
+  ci.stage.pSpecializationInfo = spec.info();
+  ci.layout = p.layout;
   VkPipeline pipeline = VK_NULL_HANDLE;
   VXR_VK_TRY(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
   p.pipeline = Handle<VkPipeline>(dev, pipeline);
@@ -57,18 +75,7 @@ Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const Comput
 Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const FullscreenPipelineCreateInfo& info) {
   VkDevice dev = ctx.device();
   ComputePipeline p;
-  VkDescriptorSetLayoutCreateInfo dl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  dl.bindingCount = static_cast<uint32_t>(info.bindings.size());
-  dl.pBindings = info.bindings.data();
-  VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
-  VXR_VK_TRY(vkCreateDescriptorSetLayout(dev, &dl, nullptr, &set_layout));
-  p.set_layout = Handle<VkDescriptorSetLayout>(dev, set_layout);
-  VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-  pl.setLayoutCount = 1;
-  pl.pSetLayouts = &set_layout;
-  VkPipelineLayout layout = VK_NULL_HANDLE;
-  VXR_VK_TRY(vkCreatePipelineLayout(dev, &pl, nullptr, &layout));
-  p.layout = Handle<VkPipelineLayout>(dev, layout);
+  VXR_RETURN_IF_ERROR(create_layouts(ctx, info.bindings, 0, p));
 
   VXR_ASSIGN_OR_RETURN(Handle<VkShaderModule> vs, create_shader_module(ctx, info.vertex_shader));
   VXR_ASSIGN_OR_RETURN(Handle<VkShaderModule> fs, create_shader_module(ctx, info.fragment_shader));
@@ -81,14 +88,8 @@ Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const Ful
   stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
   stages[1].module = fs;
   stages[1].pName = "main";
-  std::vector<VkSpecializationMapEntry> entries;
-  std::vector<uint32_t> values;
-  for (const auto& sc : info.specialization) {
-    entries.push_back({sc.id, static_cast<uint32_t>(values.size() * 4), 4});
-    values.push_back(sc.value);
-  }
-  VkSpecializationInfo spec{static_cast<uint32_t>(entries.size()), entries.data(), values.size() * 4, values.data()};
-  stages[1].pSpecializationInfo = entries.empty() ? nullptr : &spec;
+  const Specialization spec(info.specialization);
+  stages[1].pSpecializationInfo = spec.info();
 
   VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
   VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
@@ -128,7 +129,7 @@ Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const Ful
   ci.pMultisampleState = &ms;
   ci.pColorBlendState = &cb;
   ci.pDynamicState = &ds;
-  ci.layout = layout;
+  ci.layout = p.layout;
   VkPipeline pipeline = VK_NULL_HANDLE;
   VXR_VK_TRY(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
   p.pipeline = Handle<VkPipeline>(dev, pipeline);
