@@ -902,4 +902,23 @@ TEST_CASE("zarr: malformed metadata gives one line naming the file and the key")
   // A .zarr folder with no metadata is not mistaken for a slice folder.
   const fs::path empty = scratch("nothing.zarr");
   check_one_line(open_import_source({empty.string()}).status(), {"nothing.zarr", "zarr.json"});
+  check_one_line(open_import_source({empty.string() + "/"}).status(), {"nothing.zarr", "zarr.json"});
+}
+
+TEST_CASE("zarr: a bare Zarr array and a bioformats2raw folder open without OME multiscales at the top") {
+  const Volume v = make_volume({5, 6, 7}, DType::kU16);
+  ArraySpec s;
+  s.chunks = {4, 4, 4};
+  s.codecs = {codec(zarr::CodecId::kGzip)};
+  const fs::path bare = scratch("bare_array");
+  write_array(bare, v, s);  // .zarray at the top: axes by rank (z, y, x)
+  check_slab(bare, v);
+  check_chunks(*open_cs(bare), 0, v);
+
+  const fs::path b2r = scratch("b2r.zarr");
+  write_text(b2r / ".zgroup", R"({"zarr_format": 2})");
+  write_text(b2r / ".zattrs", R"({"bioformats2raw.layout": 3})");
+  write_ome(b2r / "0", 2, {"z", "y", "x"}, "micrometer", {{"0", {1, 1, 1}, {}}});
+  write_array(b2r / "0" / "0", v, s);
+  check_slab(b2r, v);
 }

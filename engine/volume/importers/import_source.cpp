@@ -27,6 +27,11 @@ bool ends_with_lower(const std::string& path, std::string_view suffix) {
   return l.size() >= suffix.size() && l.compare(l.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+std::string without_trailing_slashes(std::string path) {
+  while (path.size() > 1 && path.back() == '/') path.pop_back();
+  return path;
+}
+
 // One file: pick the importer by content first, then by name.
 Result<std::unique_ptr<SlabSource>> open_one_file(const std::string& path) {
   const std::string ext = extension_lower(path);
@@ -77,7 +82,8 @@ Result<std::unique_ptr<SlabSource>> open_import_source(const std::vector<std::st
   std::error_code ec;
   if (inputs.size() == 1 && zarr::looks_like_zarr(first)) {
     source = open_ome_zarr_import(first);
-  } else if (inputs.size() == 1 && ends_with_lower(first, ".zarr") && std::filesystem::is_directory(first, ec)) {
+  } else if (inputs.size() == 1 && ends_with_lower(without_trailing_slashes(first), ".zarr") &&
+             std::filesystem::is_directory(first, ec)) {
     return invalid_argument(first + ": named like a Zarr folder but holds no .zgroup, .zattrs, .zarray or zarr.json; "
                             "point at the OME-Zarr image folder");
   } else if (inputs.size() > 1 || std::filesystem::is_directory(first, ec) ||
