@@ -922,3 +922,22 @@ TEST_CASE("zarr: a bare Zarr array and a bioformats2raw folder open without OME 
   write_array(b2r / "0" / "0", v, s);
   check_slab(b2r, v);
 }
+
+TEST_CASE("zarr: slice-shaped chunks (1 x 64 x 64) are decoded once each when the chunk source reads every chunk") {
+  // bioformats2raw writes one z slice per chunk; a payload spans `edge` of
+  // them. With a 1000-byte budget nothing would stay cached (every payload
+  // decoding ~10 slices again); the chunk source raises it to two payloads' worth.
+  const Volume v = make_volume({20, 64, 64}, DType::kU8);
+  ArraySpec s;
+  s.chunks = {1, 64, 64};
+  const fs::path dir = write_image("slices", v, s);
+  auto img = zarr::OmeZarrImage::open(dir.string(), 1000);
+  REQUIRE(img.is_ok());
+  std::shared_ptr<const zarr::OmeZarrImage> shared = std::move(img).value();
+  auto cs = ZarrChunkSource::create(shared, 8, 1);
+  REQUIRE(cs.is_ok());
+  const zarr::ZarrArray& a = *shared->levels()[0].array;
+  CHECK(a.cache_budget() == 2 * 10 * 64 * 64);  // 10 slices of 64 x 64 u8 per payload
+  check_chunks(**cs, 0, v);
+  CHECK(a.decodes() == 20);
+}

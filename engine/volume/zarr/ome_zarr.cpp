@@ -213,8 +213,7 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
   }
 
   // Open the arrays.
-  const uint64_t per_level = std::max<uint64_t>(
-      uint64_t(4) << 20, cache_bytes / std::max<size_t>(1, g.is_array ? 1 : ms.at("datasets").size()));
+  const uint64_t per_level = cache_bytes / std::max<size_t>(1, g.is_array ? 1 : ms.at("datasets").size());
   std::vector<std::string> paths;
   if (g.is_array) {
     paths.push_back(prefix);

@@ -383,6 +383,16 @@ uint64_t ZarrArray::cached_bytes() const {
   return held_;
 }
 
+void ZarrArray::raise_cache_bytes(uint64_t bytes) {
+  std::lock_guard lock(mutex_);
+  cache_bytes_ = std::max(cache_bytes_, bytes);
+}
+
+uint64_t ZarrArray::cache_budget() const {
+  std::lock_guard lock(mutex_);
+  return cache_bytes_;
+}
+
 uint64_t ZarrArray::decodes() const {
   std::lock_guard lock(mutex_);
   return decodes_;

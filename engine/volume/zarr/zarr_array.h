@@ -84,6 +84,12 @@ class ZarrArray {
   // The store key of a read unit (a chunk, or a shard for sharded arrays).
   std::string chunk_key(std::span<const uint64_t> grid_index) const;
 
+  // Raises the decoded-chunk budget to at least `bytes` (never lowers it):
+  // a reader whose boxes span many chunks (thin slice-shaped chunks) needs
+  // the chunks of one box resident, or every box decodes them all again.
+  void raise_cache_bytes(uint64_t bytes);
+  uint64_t cache_budget() const;
+
   // Decoded chunks held now, and how often a chunk had to be decoded.
   uint64_t cached_bytes() const;
   uint64_t decodes() const;

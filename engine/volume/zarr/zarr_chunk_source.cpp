@@ -100,6 +100,23 @@ Result<std::unique_ptr<ZarrChunkSource>> ZarrChunkSource::create(std::shared_ptr
     }
     s->levels_.push_back(li);
   }
+  // Every payload read should find the zarr chunks of the previous one (and
+  // of one read on another loader thread) still decoded: with slice-shaped
+  // chunks (bioformats2raw writes 1x1024x1024) one payload spans edge chunks.
+  const uint32_t edge = chunk_size + 2 * apron;
+  for (size_t l = 0; l < s->levels_.size(); ++l) {
+    zarr::ZarrArray& array = *levels[l].array;
+    const zarr::ArrayMeta& m = array.meta();
+    long double span = dtype_bytes(m.dtype);
+    for (size_t d = 0; d < m.shape.size(); ++d) {
+      const uint64_t c = m.chunks[d];
+      // Chunks a box of `edge` voxels can touch along this axis (t and c axes
+      // are read one voxel at a time: this over-counts them, harmlessly).
+      const uint64_t extent = std::min<uint64_t>(m.shape[d], edge);
+      span *= static_cast<long double>(std::min<uint64_t>((extent + c - 2) / c + 1, (m.shape[d] + c - 1) / c) * c);
+    }
+    array.raise_cache_bytes(static_cast<uint64_t>(std::min<long double>(2 * span, kMaxLevelCache)));
+  }
   return s;
 }
 

@@ -8,6 +8,10 @@
 // dataset that does not (a 3x step, a finer level after a coarser one) ends
 // the pyramid and is named in warnings(). Level dims are the arrays' shapes.
 //
+// Each level's decoded-chunk cache is raised to hold the zarr chunks of two
+// payloads (up to kMaxLevelCache), so neighbouring reads reuse them even when
+// chunks are thin slices.
+//
 // stats(): zarr stores no statistics, and reading chunks to find them would
 // make stats() as slow as read(). A chunk not read yet reports the dtype's
 // whole range (conservative: never skipped as empty); once read(), its exact
@@ -28,6 +32,9 @@ namespace vxr {
 class ZarrChunkSource final : public ChunkSource {
  public:
   static constexpr size_t kStatsMemo = size_t(1) << 18;
+  // Upper bound on the decoded-chunk cache create() asks each level's array
+  // for: twice the zarr chunks one payload spans, at most this.
+  static constexpr uint64_t kMaxLevelCache = uint64_t(1) << 30;
 
   // chunk_size 8..512, apron 1..4 (the brick renderer needs an apron).
   static Result<std::unique_ptr<ZarrChunkSource>> open(const std::string& path, uint32_t chunk_size = 64,
