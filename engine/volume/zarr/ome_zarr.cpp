@@ -348,6 +348,12 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
   } else {
     info.unit = "px";
   }
+  for (int a = 0; a < 3; ++a)
+    if (info.dims[a] > (uint64_t(1) << 32))
+      return unsupported(g.what + ": level 0 is " + std::to_string(info.dims[a]) + " voxels along " + "xyz"[a] +
+                         "; vxr reads up to 2^32 voxels a side");
+  if ((img->c_axis_ >= 0 && m0.shape[img->c_axis_] > 65536) || (img->t_axis_ >= 0 && m0.shape[img->t_axis_] > 65536))
+    return unsupported(g.what + ": more than 65536 channels or timepoints");
   if (info.channels == 0 || info.timepoints == 0 || info.voxels_per_volume() == 0)
     return bad(g.what, "the image is empty (a dimension of level 0 is 0)");
   return img;

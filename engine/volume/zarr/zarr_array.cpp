@@ -50,6 +50,13 @@ Status check_chunk_size(const std::vector<uint64_t>& chunks, DType dtype, const 
   return Status();
 }
 
+// Sides up to 2^40 voxels keep every offset and chunk count far from overflow.
+Status check_shape(const std::vector<uint64_t>& shape, const std::string& what) {
+  for (uint64_t v : shape)
+    if (v > (uint64_t(1) << 40)) return unsupported(what + ": 'shape' has a side over 2^40 voxels; vxr reads smaller arrays");
+  return Status();
+}
+
 struct DtypeSpec {
   DType dtype;
   bool big_endian;
@@ -229,6 +236,7 @@ Result<ArrayMeta> parse_v2_array(const std::string& text, const std::string& wha
     ArrayMeta m;
     m.zarr_format = 2;
     VXR_ASSIGN_OR_RETURN(m.shape, int_list(j, "shape", 0, 0, what));
+    VXR_RETURN_IF_ERROR(check_shape(m.shape, what));
     VXR_ASSIGN_OR_RETURN(m.chunks, int_list(j, "chunks", m.shape.size(), 1, what));
     if (!j.contains("dtype")) return bad(what, "'dtype' is missing");
     VXR_ASSIGN_OR_RETURN(DtypeSpec dt, parse_v2_dtype(j.at("dtype"), what));
@@ -268,6 +276,7 @@ Result<ArrayMeta> parse_v3_array(const std::string& text, const std::string& wha
     ArrayMeta m;
     m.zarr_format = 3;
     VXR_ASSIGN_OR_RETURN(m.shape, int_list(j, "shape", 0, 0, what));
+    VXR_RETURN_IF_ERROR(check_shape(m.shape, what));
     const size_t n = m.shape.size();
     if (!j.contains("data_type")) return bad(what, "'data_type' is missing");
     VXR_ASSIGN_OR_RETURN(m.dtype, parse_v3_dtype(j.at("data_type"), what));

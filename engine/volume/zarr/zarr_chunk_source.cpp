@@ -80,7 +80,7 @@ Result<std::unique_ptr<ZarrChunkSource>> ZarrChunkSource::create(std::shared_ptr
       const uint32_t whole = static_cast<uint32_t>(std::lround(f));
       // The LOD traversal splits a chunk into 1 or 2 children per axis.
       const double prev = l == 0 ? 1.0 : double(s->levels_.back().downsample[a]);
-      ok = ok && whole >= 1 && near(f, whole) && (l == 0 ? whole == 1 : near(f / prev, 1.0) || near(f / prev, 2.0));
+      ok = ok && levels[l].dims[a] > 0 && whole >= 1 && near(f, whole) && (l == 0 ? whole == 1 : near(f / prev, 1.0) || near(f / prev, 2.0));
       li.downsample[a] = whole;
       li.dims[a] = levels[l].dims[a];
       li.chunk_counts[a] = static_cast<uint32_t>((li.dims[a] + chunk_size - 1) / chunk_size);
