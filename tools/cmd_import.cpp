@@ -121,7 +121,7 @@ int run_import(const ImportArgs& a) {
 
 void add_import_command(CLI::App& app, Invocation& inv) {
   auto args = std::make_shared<ImportArgs>();
-  auto* cmd = app.add_subcommand("import", "convert image files (raw+JSON, TIFF, ...) into a .vxc container with its "
+  auto* cmd = app.add_subcommand("import", "convert image files (raw+JSON, TIFF, OME-Zarr, ...) into a .vxc container with its "
                                            "resolution pyramid");
   cmd->add_option("inputs", args->inputs, "input file(s), folder or glob")->required();
   cmd->add_option("-o,--output", args->output, "output .vxc file")->required();

@@ -25,6 +25,7 @@
 #include "scene/render_settings.h"
 #include "volume/container_reader.h"
 #include "volume/load_dense.h"
+#include "volume/open_chunk_source.h"
 #include "volume/procedural_source.h"
 
 namespace vxr::cli {
@@ -32,7 +33,7 @@ namespace {
 
 struct Options {
   std::string input, output, settings_path, camera, size = "512x512", model, colormap, window, path = "compute";
-  std::string renderer;  // "" = lod for .vxc and procedural: inputs, dense otherwise
+  std::string renderer;  // "" = lod for chunk sources (.vxc, OME-Zarr) and procedural: inputs, dense otherwise
   double fov = 0.0, step = 0.0, reference_step = 1.0 / 16.0;
   double lod_bias = 0.0, frame_budget_ms = 0.0;
   bool lod_bias_given = false;
@@ -107,7 +108,7 @@ Result<std::string> read_text(const std::string& path) {
 
 using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 
-// The out-of-core path: a .vxc container or a procedural source through the
+// The out-of-core path: a .vxc container, an OME-Zarr folder or a procedural source through the
 // brick renderer. Without --frame-budget-ms it renders until nothing is
 // missing (every wanted brick resident) and writes that frame; with it, it
 // renders --frames frames (default 30) letting the frame-budget controller set
@@ -125,9 +126,10 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
       window_given = true;
     }
   } else {
-    auto r = ContainerReader::open(o.input);
+    auto r = open_chunk_source(o.input);
     if (!r) return fail(r.status());
-    src = std::move(r).value();
+    for (const std::string& w : r->warnings) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), w.c_str());
+    src = std::move(r->source);
   }
   const VolumeInfo& info = src->info();
   if (info.dtype != DType::kU8 && info.dtype != DType::kU16)
@@ -272,14 +274,14 @@ int run(const Options& o) {
   // Which renderer: the out-of-core brick renderer for containers and
   // procedural sources (the product's path for them), the dense one otherwise.
   const bool procedural = starts_with(o.input, "procedural:");
-  const bool container = std::filesystem::path(o.input).extension() == ".vxc";
+  const bool container = is_chunk_source_input(o.input);  // .vxc or OME-Zarr, read in place
   if (!o.renderer.empty() && o.renderer != "lod" && o.renderer != "dense")
     return fail(invalid_argument("--renderer: use lod or dense, not '" + o.renderer + "'"), kExitUsage);
   std::string renderer = o.renderer;
   if (renderer.empty()) renderer = (procedural || container) && !o.reference ? "lod" : "dense";
   if (renderer == "lod" && !procedural && !container)
-    return fail(invalid_argument("--renderer lod: '" + o.input + "' is not a .vxc container; convert it with "
-                                 "`vxr import` first, or use --renderer dense"),
+    return fail(invalid_argument("--renderer lod: '" + o.input + "' is not a .vxc container or OME-Zarr folder; "
+                                 "convert it with `vxr import` first, or use --renderer dense"),
                 kExitUsage);
   if (renderer == "dense" && procedural)
     return fail(invalid_argument("--renderer dense: a procedural source is drawn only by --renderer lod"), kExitUsage);
@@ -397,7 +399,7 @@ int run(const Options& o) {
 
 void add_render_command(CLI::App& app, Invocation& inv) {
   auto o = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand("render", "render one picture of a volume (.vxc, TIFF, OME-TIFF, slices, .ims, raw+JSON, procedural:vessels:SIDE) to PNG");
+  auto* cmd = app.add_subcommand("render", "render one picture of a volume (.vxc, OME-Zarr, TIFF, OME-TIFF, slices, .ims, raw+JSON, procedural:vessels:SIDE) to PNG");
   cmd->add_option("input", o->input, "the volume")->required();
   cmd->add_option("-o,--out", o->output, "output PNG")->required();
   cmd->add_option("--settings", o->settings_path, "render settings JSON (RenderSettings, or a Scene with render+camera)");
@@ -410,7 +412,7 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--step", o->step, "sample step in voxels");
   cmd->add_option("--path", o->path, "compute (default) or fragment");
   cmd->add_option("--renderer", o->renderer,
-                  "lod (out-of-core bricks; default for .vxc and procedural:vessels:SIDE) or dense (whole volume)");
+                  "lod (out-of-core bricks; default for .vxc, OME-Zarr and procedural:vessels:SIDE) or dense (whole volume)");
   cmd->add_option("--lod-bias", o->lod_bias, "lod: log2 of voxels per pixel accepted (+1 coarser, -1 finer; default 0)");
   cmd->add_option("--frame-budget-ms", o->frame_budget_ms,
                   "lod: render --frames frames, adjusting the LOD bias to hold this frame time");

@@ -7,11 +7,13 @@
 
 #include "volume/importers/imaris_importer.h"
 #include "volume/importers/ome_tiff_importer.h"
+#include "volume/importers/ome_zarr_importer.h"
 #include "volume/importers/picture_decoder.h"
 #include "volume/importers/raw_importer.h"
 #include "volume/importers/slice_series_importer.h"
 #include "volume/importers/tiff_importer.h"
 #include "volume/importers/tiff_reader.h"
+#include "volume/zarr/ome_zarr.h"
 
 namespace vxr {
 namespace {
@@ -26,6 +28,11 @@ bool ends_with_lower(const std::string& path, std::string_view suffix) {
   std::string l = path;
   for (char& c : l) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return l.size() >= suffix.size() && l.compare(l.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::string without_trailing_slashes(std::string path) {
+  while (path.size() > 1 && path.back() == '/') path.pop_back();
+  return path;
 }
 
 // One file: pick the importer by content first, then by name.
@@ -45,7 +52,7 @@ Result<std::unique_ptr<SlabSource>> open_one_file(const std::string& path) {
   if (ext == ".png" || ext == ".jpg" || ext == ".jpeg")
     return invalid_argument(path + ": not a " + ext.substr(1) + " file (wrong signature)");
   return unsupported(path + ": unrecognised input format (import reads TIFF, OME-TIFF, ImageJ TIFF, Imaris .ims, "
-                     "PNG/JPEG slices, or raw+JSON)");
+                     "PNG/JPEG slices, OME-Zarr folders, or raw+JSON)");
 }
 
 
@@ -88,7 +95,13 @@ Result<std::unique_ptr<SlabSource>> open_import_source(const std::vector<std::st
   const std::string& first = inputs.front();
   Result<std::unique_ptr<SlabSource>> source = unsupported(first + ": unrecognised input format");
   std::error_code ec;
-  if (inputs.size() > 1 || std::filesystem::is_directory(first, ec) ||
+  if (inputs.size() == 1 && zarr::looks_like_zarr(first)) {
+    source = open_ome_zarr_import(first);
+  } else if (inputs.size() == 1 && ends_with_lower(without_trailing_slashes(first), ".zarr") &&
+             std::filesystem::is_directory(first, ec)) {
+    return invalid_argument(first + ": named like a Zarr folder but holds no .zgroup, .zattrs, .zarray or zarr.json; "
+                            "point at the OME-Zarr image folder");
+  } else if (inputs.size() > 1 || std::filesystem::is_directory(first, ec) ||
       (!std::filesystem::exists(first, ec) && first.find_first_of("*?[") != std::string::npos)) {
     source = open_slice_series_import(inputs);
   } else if (!std::filesystem::exists(first, ec)) {
