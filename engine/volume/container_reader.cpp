@@ -35,7 +35,7 @@ Result<std::unique_ptr<ContainerReader>> ContainerReader::open(const std::string
   if (f.file_bytes != size) return corrupt(path + ": file is " + std::to_string(size) + " bytes, its footer says " +
                                            std::to_string(f.file_bytes) + " (truncated or appended to)");
   if (f.header_checksum != header_sum) return corrupt(path + ": footer does not belong to this header");
-  if (f.index_offset < header_bytes || f.chunk_count > size / sizeof(vxc::IndexEntry) ||
+  if (f.index_offset < header_bytes || f.index_offset > size || f.chunk_count > size / sizeof(vxc::IndexEntry) ||
       f.index_bytes != sizeof(vxc::IndexHeader) + f.chunk_count * sizeof(vxc::IndexEntry) ||
       f.index_offset + f.index_bytes + sizeof f != size)
     return corrupt(path + ": footer points at an impossible index");
