@@ -3,7 +3,9 @@
 // the corpus is committed. Rebuild and rerun with:
 //   g++ -std=c++20 -O1 tests/fuzz/make_seeds.cpp -o /tmp/make_seeds -ltiff -ljpeg -lpng -llz4 \
 //     && /tmp/make_seeds tests/fuzz/corpus
-// (real third-party seeds, copied from ../shared/testdata, sit beside these.)
+// (real third-party seeds, copied from ../shared/testdata, sit beside these; the
+// container seeds are `vxr import <a tiff seed> -o X.vxc --chunk 8`, one with
+// --codec raw, one of a 9^3 all-zero f32 raw sidecar: uniform chunks.)
 #include <cstddef>
 #include <cstdio>
 
