@@ -349,7 +349,8 @@ Result<PageInfo> TiffFile::describe_current(uint32_t index) {
   const bool decoded = p.compression != COMPRESSION_NONE || p.fill_order != FILLORDER_MSB2LSB;
   if (decoded && block_bytes > max_decoded_block_bytes())
     return out_of_range(where + ": " + (p.tiled ? "tiles" : "strips") + " of " + std::to_string(block_bytes) +
-                        " bytes each do not fit the import memory budget (" +
+                        " bytes each exceed the " + std::to_string(max_decoded_block_bytes() >> 10) +
+                        " KiB one decoded block may take (1/8 of the import memory budget, " +
                         std::to_string(import_memory_budget() >> 20) +
                         " MiB); re-save with smaller strips or tiles, or raise --memory");
   const uint32_t rows_per_block = p.block_h;
