@@ -450,7 +450,7 @@ TEST_CASE("brick features: depth colour matches the CPU reference (golden)") {
   run(dc);
 }
 
-TEST_CASE("brick features: gradient opacity across brick seams; an apron-1 source filled from neighbours equals "
+TEST_CASE("brick features: gradient opacity across brick seams, an apron-1 source filled from neighbours equals "
           "an apron-2 source") {
   auto src2 = mri(2);
   RenderSettings s = test::mri_settings(OpticalModel::kEmissionAbsorption, "gray");

@@ -631,7 +631,7 @@ TEST_CASE("zarr: dtypes u8 i8 i16 u32 i32 f32 read back exactly") {
     }
 }
 
-TEST_CASE("zarr: a missing chunk reads as fill_value; a truncated chunk is an error naming its key") {
+TEST_CASE("zarr: a missing chunk reads as fill_value, a truncated chunk is an error naming its key") {
   const Volume v0 = make_volume({6, 6, 6}, DType::kU16);
   Volume v = v0;
   ArraySpec s;
