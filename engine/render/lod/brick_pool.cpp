@@ -79,7 +79,9 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
       return unsupported("brick pool: " + ctx.info().name + " cannot filter R32_SFLOAT 3D textures; " +
                          dtype_name(dtype) + " volumes need it");
   }
-  if (options.slots.x == 0 || options.slots.y == 0 || options.slots.z == 0)
+  glm::uvec3 slots = options.slots;
+  const bool auto_slots = slots == glm::uvec3(0);
+  if (!auto_slots && (slots.x == 0 || slots.y == 0 || slots.z == 0))
     return invalid_argument("brick pool: every axis needs at least one slot");
   if (options.apron > 4) return invalid_argument("brick pool: an apron of at most 4 voxels, not " +
                                                  std::to_string(options.apron));
@@ -99,11 +101,20 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   p->edge_ = source.chunk_size() + 2 * p->apron_;
   p->channel_bytes_ = uint64_t(p->edge_) * p->edge_ * p->edge_ * p->texel_bytes_;
   p->brick_bytes_ = p->channel_bytes_ * nch;
-  // Every channel's atlas has the same slots: fit them as one brick of all channels' texels.
-  VXR_ASSIGN_OR_RETURN(p->slots_, fit_slots(options.slots, p->edge_, p->texel_bytes_ * nch,
-                                            ctx.limits().maxImageDimension3D, kMaxAtlasBytes));
-  const uint64_t ext[3] = {uint64_t(p->slots_.x) * p->edge_, uint64_t(p->slots_.y) * p->edge_,
-                           uint64_t(p->slots_.z) * p->edge_};
+  if (auto_slots) {
+    // Halve the largest axis until the atlases fit (at least 2 x 2 x 2).
+    slots = {16, 16, 8};
+    while (uint64_t(slots.x) * slots.y * slots.z * p->brick_bytes_ > options.auto_atlas_bytes &&
+           slots.x * slots.y * slots.z > 8) {
+      uint32_t& a = slots.x >= slots.y && slots.x >= slots.z ? slots.x : slots.y >= slots.z ? slots.y : slots.z;
+      a /= 2;
+    }
+  }
+  // Lowered further to fit the device, so containers with wide chunks (up to 512 + apron) still draw.
+  VXR_ASSIGN_OR_RETURN(slots, fit_slots(slots, p->edge_, p->texel_bytes_ * nch, ctx.limits().maxImageDimension3D,
+                                        kMaxAtlasBytes));
+  p->slots_ = slots;
+  const uint64_t ext[3] = {uint64_t(slots.x) * p->edge_, uint64_t(slots.y) * p->edge_, uint64_t(slots.z) * p->edge_};
   // The ring must hold at least one brick, however wide the container's chunks are.
   const uint64_t staging_bytes = std::max(options.staging_bytes, p->brick_bytes_);
   for (uint32_t c = 0; c < nch; ++c) {

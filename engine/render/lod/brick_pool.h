@@ -42,12 +42,13 @@
 namespace vxr {
 
 struct BrickPoolOptions {
-  // Slots per atlas axis wanted; the atlas is slots * (chunk_size + 2 * apron)
-  // texels per axis. create() lowers them to fit maxImageDimension3D and the
-  // heap with every channel's atlas (fit_slots), so wide chunks, float
-  // texels and several channels still draw.
-  glm::uvec3 slots{16, 16, 8};
-  uint64_t staging_bytes = 16ull << 20;  // the upload ring; bounds one frame's uploads (grown to one brick)
+  // Slots per atlas axis; the atlas is slots * (chunk_size + 2 * apron) texels
+  // per axis, checked against maxImageDimension3D and the memory heap.
+  // {0, 0, 0}: automatic, the largest grid up to 16 x 16 x 8 whose atlases
+  // (every channel, the dtype's texel size) fit in auto_atlas_bytes.
+  glm::uvec3 slots{0, 0, 0};
+  uint64_t auto_atlas_bytes = 1ull << 30;
+  uint64_t staging_bytes = 16ull << 20;  // the upload ring; bounds one frame's uploads
   // Voxels around each brick in its slot: 0 = the source's; more than the
   // source stores is filled from neighbouring chunks (see above). At most 4.
   uint32_t apron = 0;
@@ -56,21 +57,22 @@ struct BrickPoolOptions {
   std::vector<uint32_t> channels;
 };
 
+
+// Largest set of atlases create() makes: lavapipe has one 2 GiB heap; leave room for the rest.
+constexpr uint64_t kMaxAtlasBytes = (1ull << 31) - (64ull << 20);
+
+// `wanted` slots per axis lowered until every side fits max_dim texels and the
+// atlases fit max_bytes (texel_bytes: all channels of one texel). kOutOfRange
+// when not even one brick fits.
+Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_bytes, uint32_t max_dim,
+                             uint64_t max_bytes);
+
 // The atlas texel format for a dtype (see above) and data units per texel
 // unit: 255 (u8, UNORM), 65535 (u16, UNORM), 1 (float texels).
 VkFormat brick_texel_format(DType dtype);
 double brick_value_scale(DType dtype);
 // `n` native voxels -> atlas texels of brick_texel_format(dtype).
 void convert_to_texels(DType dtype, const uint8_t* in, size_t n, uint8_t* out);
-
-// Largest atlas memory create() makes, all channels together: lavapipe has one
-// 2 GiB heap; leave room for the rest.
-constexpr uint64_t kMaxAtlasBytes = (1ull << 31) - (64ull << 20);
-
-// `wanted` slots per axis lowered until every side fits max_dim texels and the
-// atlas fits max_bytes. kOutOfRange when not even one brick fits.
-Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_bytes, uint32_t max_dim,
-                             uint64_t max_bytes);
 
 struct UploadStats {
   uint32_t bricks = 0;
