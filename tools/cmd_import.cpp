@@ -82,6 +82,7 @@ int run_import(const ImportArgs& a) {
   if (!mem || *mem < (uint64_t(16) << 20))
     return fail(invalid_argument("--memory '" + a.memory + "': give a size of at least 16M, e.g. 512M or 2G"), kExitUsage);
   opt.memory_bytes = *mem;
+  hints.memory_bytes = *mem;  // readers size their buffers against it too
   if (a.downsample == "max") opt.downsample = vxc::Downsample::kMax;
   else if (a.downsample != "mean")
     return fail(invalid_argument("--downsample '" + a.downsample + "': use mean or max"), kExitUsage);

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include "core/json_number.h"
 
 namespace vxr {
 namespace {
@@ -58,14 +59,25 @@ json to_j(const RenderSettings& s) {
 
 // Reads j[key] into out when present; a wrong type throws json::type_error,
 // which the callers turn into a message naming `key`.
-template <typename T>
-void get(const json& j, const char* key, T& out) {
-  if (j.contains(key)) out = j.at(key).get<T>();
-}
-
 struct KeyError {
   std::string message;
 };
+
+// Numbers go through json_number: a value the field's type cannot hold
+// (1e300 for an integer) is an error naming the key, not a wrapped value.
+template <typename T>
+void get(const json& j, const char* key, T& out) {
+  if (!j.contains(key)) return;
+  if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+    const std::optional<T> v = json_number<T>(j.at(key));
+    if (!v)
+      throw KeyError{"\"" + std::string(key) + "\": " + (j.at(key).is_number() ? j.at(key).dump() : "the value") +
+                     " is not " + (std::is_integral_v<T> ? "a non-negative integer in range" : "a finite number")};
+    out = *v;
+  } else {
+    out = j.at(key).get<T>();
+  }
+}
 
 void from_j(const json& j, RenderSettings& s) {
   if (!j.is_object()) throw KeyError{"the settings must be a JSON object"};

@@ -11,6 +11,9 @@
 #include <fstream>
 #include <optional>
 
+#include "core/checked_math.h"
+#include "volume/importers/import_limits.h"
+
 namespace vxr::tiff {
 
 struct TiffFile::Sink {
@@ -58,6 +61,20 @@ float half_to_float(uint16_t h) {
   float f;
   std::memcpy(&f, &bits, 4);
   return f;
+}
+
+// The most a block of one stored byte can decode to with compression `c`: a
+// header's strip size is believed only as far as its stored bytes can pay
+// for it (a 158-byte file claiming 2 GB strips grew to 24 GB).
+uint64_t max_expansion(uint16_t c) {
+  switch (c) {
+    case COMPRESSION_NONE: return 1;
+    case COMPRESSION_PACKBITS: return 64;         // 2 bytes -> 128 repeats
+    case COMPRESSION_DEFLATE:
+    case COMPRESSION_ADOBE_DEFLATE: return 1100;  // deflate's limit is 1032:1
+    case COMPRESSION_LZW: return 4096;            // one 9..12-bit code -> at most 4094 bytes
+    default: return uint64_t(1) << 16;           // JPEG, ZSTD, LZMA, fax...: generous
+  }
 }
 
 const char* compression_name(uint16_t c) {
@@ -114,7 +131,7 @@ std::optional<std::pair<uint64_t, uint64_t>> raw_first_page_size(const std::stri
   if (b.size() < 16) return std::nullopt;
   const bool be = b[0] == 'M', big = (be ? b[3] : b[2]) == 43;
   auto rd = [&](uint64_t o, int n) -> std::optional<uint64_t> {
-    if (o + n > b.size()) return std::nullopt;
+    if (!range_inside(o, uint64_t(n), b.size())) return std::nullopt;  // o comes from the file: no o + n overflow
     uint64_t v = 0;
     for (int i = 0; i < n; ++i) v |= uint64_t(b[o + i]) << (8 * (be ? n - 1 - i : i));
     return v;
@@ -124,7 +141,9 @@ std::optional<std::pair<uint64_t, uint64_t>> raw_first_page_size(const std::stri
   const auto count = big ? rd(*ifd, 8) : rd(*ifd, 2);
   if (!count) return std::nullopt;
   uint64_t w = 0, h = 0;
-  const uint64_t entry = big ? 20 : 12, first = *ifd + (big ? 8 : 2);
+  const uint64_t entry = big ? 20 : 12;
+  if (*ifd > b.size()) return std::nullopt;
+  const uint64_t first = *ifd + (big ? 8 : 2);
   for (uint64_t i = 0; i < *count && i < 4096; ++i) {
     const auto tag = rd(first + i * entry, 2), type = rd(first + i * entry + 2, 2);
     if (!tag || !type) break;
@@ -172,7 +191,8 @@ Result<std::unique_ptr<TiffFile>> TiffFile::open(const std::string& path) {
   TIFFOpenOptions* opts = TIFFOpenOptionsAlloc();
   TIFFOpenOptionsSetErrorHandlerExtR(opts, on_error, f->sink_.get());
   TIFFOpenOptionsSetWarningHandlerExtR(opts, on_warning, f->sink_.get());
-  TIFFOpenOptionsSetMaxSingleMemAlloc(opts, tmsize_t(1) << 31);
+  // libtiff sizes some buffers from the header; keep each within the import budget.
+  TIFFOpenOptionsSetMaxSingleMemAlloc(opts, tmsize_t(std::min<uint64_t>(uint64_t(1) << 31, import_memory_budget())));
   // "m": no memory mapping. libtiff maps read-only files by default, and every
   // compressed strip it decodes from the map stays resident (file-backed RSS):
   // a 1.4 GB LZW stack imported with --memory 256M peaked at 1.7 GB RSS,
@@ -324,15 +344,39 @@ Result<PageInfo> TiffFile::describe_current(uint32_t index) {
   if (expected_blocks < need)
     return corrupt(where + ": has " + std::to_string(expected_blocks) + " strips/tiles but needs " +
                    std::to_string(need) + "; the file is damaged");
+  // Blocks that are decoded whole (compressed, or bit-reversed) get a buffer
+  // of block_bytes: it must fit the import budget before anything is read.
+  const bool decoded = p.compression != COMPRESSION_NONE || p.fill_order != FILLORDER_MSB2LSB;
+  if (decoded && block_bytes > max_decoded_block_bytes())
+    return out_of_range(where + ": " + (p.tiled ? "tiles" : "strips") + " of " + std::to_string(block_bytes) +
+                        " bytes each exceed the " + std::to_string(max_decoded_block_bytes() >> 10) +
+                        " KiB one decoded block may take (1/8 of the import memory budget, " +
+                        std::to_string(import_memory_budget() >> 20) +
+                        " MiB); re-save with smaller strips or tiles, or raise --memory");
+  const uint32_t rows_per_block = p.block_h;
   for (uint32_t i = 0; i < need; ++i) {
     int err = 0;
     const uint64_t off = TIFFGetStrileOffsetWithErr(tif_, i, &err);
     const uint64_t len = err ? 0 : TIFFGetStrileByteCountWithErr(tif_, i, &err);
     if (err) return corrupt(where + ": cannot read strip/tile offsets; the file is damaged");
-    if (off > file_size_ || len > file_size_ - off)
+    if (!range_inside(off, len, file_size_))
       return corrupt(where + ": image data runs past the end of the file (" + (p.tiled ? "tile " : "strip ") +
                      std::to_string(i) + " ends at byte " + std::to_string(off + len) + ", the file has " +
                      std::to_string(file_size_) + " bytes); the file is truncated");
+    if (decoded) {
+      // A strip's rows: the last strip of a plane may be shorter than the rest.
+      uint64_t bytes = block_bytes;
+      if (!p.tiled) {
+        const uint32_t row0 = (i % uint32_t(per_plane)) * rows_per_block;
+        const uint32_t rows = std::min<uint32_t>(rows_per_block, h - std::min(h, row0));
+        bytes = TIFFVStripSize64(tif_, rows);
+      }
+      const auto affordable = checked_product({len, max_expansion(p.compression)});
+      if (affordable && bytes > *affordable)
+        return corrupt(where + ": " + (p.tiled ? "tile " : "strip ") + std::to_string(i) + " stores " +
+                       std::to_string(len) + " bytes but claims " + std::to_string(bytes) +
+                       " decoded, more than " + compression_name(p.compression) + " can expand to; the file is damaged");
+    }
   }
   take_error();
   return p;
