@@ -356,7 +356,7 @@ int run(const Options& o) {
     return fail(invalid_argument("--reference-step: must be within 1/256..64 voxels (default 1/16)"), kExitUsage);
   if (renderer == "dense" && o.timepoint != 0)
     return fail(invalid_argument("--timepoint: the dense renderer loads timepoint 0 only; draw other timepoints "
-                                 "out of core (a .vxc from `vxr import`, --renderer lod)"),
+                                 "out of core (a .vxc from `vxr import`, or OME-Zarr; --renderer lod)"),
                 kExitUsage);
   if (!std::isfinite(o.lod_bias) || std::abs(o.lod_bias) > 16.0)
     return fail(invalid_argument("--lod-bias: must be within -16..16 (log2 of voxels per pixel)"), kExitUsage);
