@@ -30,7 +30,7 @@
 namespace vxr::zarr {
 
 struct OmeLevel {
-  std::string path;                       // the dataset's path in the store
+  std::string path;  // the dataset's path in the store
   std::unique_ptr<ZarrArray> array;
   std::array<uint64_t, 3> dims{1, 1, 1};  // x, y, z voxels
   std::array<double, 3> scale{1, 1, 1};   // physical size of one voxel, x, y, z (in the image's unit)
@@ -45,8 +45,8 @@ bool looks_like_zarr(const std::string& path);
 class OmeZarrImage {
  public:
   // cache_bytes: decoded-chunk budget shared out between the levels.
-  static Result<std::unique_ptr<OmeZarrImage>> open(const std::string& path,
-                                                    uint64_t cache_bytes = uint64_t(256) << 20);
+  static Result<std::unique_ptr<OmeZarrImage>> open(const std::string& path, uint64_t cache_bytes = uint64_t(256)
+                                                                                                    << 20);
 
   const VolumeInfo& info() const { return info_; }
   const std::vector<OmeLevel>& levels() const { return levels_; }
