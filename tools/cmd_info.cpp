@@ -100,7 +100,7 @@ void add_info_command(CLI::App& app, Invocation& inv) {
                             {"chunk_counts", {li.chunk_counts[0], li.chunk_counts[1], li.chunk_counts[2]}},
                             {"downsample", {li.downsample[0], li.downsample[1], li.downsample[2]}}});
         j["level_info"] = levels;
-        std::printf("%s\n", j.dump(2).c_str());
+        std::printf("%s\n", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
         return kExitOk;
       }
       std::printf("file:        %s (%llu bytes)\n", path->c_str(), (unsigned long long)r.file_bytes());

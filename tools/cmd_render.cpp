@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "command.h"
+#include "core/output_file.h"
 #include "core/trace.h"
 #include "render/camera.h"
 #include "render/lod/brick_renderer.h"
@@ -216,13 +217,22 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
 
 int run(const Options& o) {
   VXR_TRACE_SCOPE("render");
+  if (!starts_with(o.input, "procedural:")) {
+    if (Status st = check_input(o.input, /*allow_dir=*/true); !st) return fail(st);
+  }
+  if (Status st = check_output(o.output, {{o.input, o.settings_path}}, "-o"); !st) return fail(st, kExitUsage);
+  if (!o.settings_path.empty()) {
+    if (Status st = check_input(o.settings_path); !st) return fail(st, kExitUsage);
+  }
   // Settings first: a bad setting is a usage error even before any file is read.
   Scene scene;
   bool window_given = false;
   if (!o.settings_path.empty()) {
     auto text = read_text(o.settings_path);
     if (!text) return fail(text.status(), kExitUsage);
-    const bool is_scene = text->find("\"render\"") != std::string::npos;
+    // A Scene has a render, camera or volume section; plain RenderSettings have none.
+    const bool is_scene = text->find("\"render\"") != std::string::npos || text->find("\"camera\"") != std::string::npos ||
+                          text->find("\"volume\"") != std::string::npos;
     if (is_scene) {
       auto sc = scene_from_json(*text);
       if (!sc) return fail(invalid_argument(o.settings_path + ": " + sc.status().message()), kExitUsage);
@@ -283,7 +293,10 @@ int run(const Options& o) {
                 kExitUsage);
   if (o.frame_budget_ms < 0.0 || !std::isfinite(o.frame_budget_ms))
     return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
-  if (o.frames < 0) return fail(invalid_argument("--frames: must be >= 1"), kExitUsage);
+  if (o.frames < 0 || o.frames > 100000) return fail(invalid_argument("--frames: must be 1..100000"), kExitUsage);
+  // The reference marches every sample in double on the CPU: below 1/256 voxel it would run for days.
+  if (o.reference && !(o.reference_step >= 1.0 / 256 && o.reference_step <= 64.0))
+    return fail(invalid_argument("--reference-step: must be within 1/256..64 voxels (default 1/16)"), kExitUsage);
   if (!std::isfinite(o.lod_bias) || std::abs(o.lod_bias) > 16.0)
     return fail(invalid_argument("--lod-bias: must be within -16..16 (log2 of voxels per pixel)"), kExitUsage);
 

@@ -1,6 +1,9 @@
 #include "volume/importers/import_source.h"
 
+#include <cmath>
 #include <filesystem>
+
+#include "core/output_file.h"
 
 #include "volume/importers/imaris_importer.h"
 #include "volume/importers/ome_tiff_importer.h"
@@ -34,6 +37,7 @@ std::string without_trailing_slashes(std::string path) {
 
 // One file: pick the importer by content first, then by name.
 Result<std::unique_ptr<SlabSource>> open_one_file(const std::string& path) {
+  VXR_RETURN_IF_ERROR(check_input(path));  // a FIFO or device would block or never end
   const std::string ext = extension_lower(path);
   if (ext == ".json") return open_raw_import(path);
   if (tiff::has_tiff_magic(path)) return open_tiff_import(path);
@@ -66,6 +70,7 @@ class HintedSource final : public SlabSource {
   }
   std::vector<std::string> warnings() const override { return inner_->warnings(); }
   std::string format_name() const override { return inner_->format_name(); }
+  std::vector<std::string> files() const override { return inner_->files(); }
 
  private:
   std::unique_ptr<SlabSource> inner_;
@@ -73,6 +78,16 @@ class HintedSource final : public SlabSource {
 };
 
 }  // namespace
+
+bool voxel_size_usable(const std::array<double, 3>& v) {
+  double lo = INFINITY, hi = 0;
+  for (double x : v) {
+    if (!std::isfinite(x) || !(x > 0)) return false;
+    lo = std::min(lo, x);
+    hi = std::max(hi, x);
+  }
+  return hi / lo <= 1e6;  // past that the volume is a sheet thinner than float precision can draw
+}
 
 Result<std::unique_ptr<SlabSource>> open_import_source(const std::vector<std::string>& inputs,
                                                        const ImportHints& hints) {
@@ -95,6 +110,12 @@ Result<std::unique_ptr<SlabSource>> open_import_source(const std::vector<std::st
     source = open_one_file(first);
   }
   if (!source) return source.status();
+  // A zero, negative or non-finite size from a header would draw nothing (or NaN) later on.
+  const auto& vs = (*source)->info().voxel_size;
+  if (!hints.voxel_size && !voxel_size_usable(vs))
+    return invalid_argument(first + ": the file gives a voxel size of " + std::to_string(vs[0]) + " x " +
+                            std::to_string(vs[1]) + " x " + std::to_string(vs[2]) +
+                            ", which vxr cannot draw; give the size with --voxel-size X,Y,Z");
   if (!hints.voxel_size && !hints.unit) return source;
   return std::unique_ptr<SlabSource>(new HintedSource(std::move(source).value(), hints));
 }
