@@ -1047,6 +1047,10 @@ TEST_CASE("zarr: a bare Zarr array and a bioformats2raw folder open without OME 
   check_slab(bare, v);
   check_chunks(*open_cs(bare), 0, v);
 
+  auto bare_src = open_import_source({bare.string()});
+  REQUIRE(bare_src.is_ok());
+  CHECK((*bare_src)->files() == std::vector<std::string>{(bare / ".zarray").string()});
+
   const fs::path b2r = scratch("b2r.zarr");
   write_text(b2r / ".zgroup", R"({"zarr_format": 2})");
   write_text(b2r / ".zattrs", R"({"bioformats2raw.layout": 3})");

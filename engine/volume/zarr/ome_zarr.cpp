@@ -365,6 +365,19 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
   return img;
 }
 
+std::vector<std::string> OmeZarrImage::metadata_files() const {
+  std::vector<std::string> folders{root_, root_ + "/0"};  // "0": a bioformats2raw image
+  for (const OmeLevel& L : levels_) folders.push_back(L.path.empty() ? root_ : root_ + "/" + L.path);
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const std::string& f : folders)
+    for (const char* name : {"zarr.json", ".zattrs", ".zgroup", ".zarray", ".zmetadata"})
+      if (const std::string p = f + "/" + name;
+          fs::is_regular_file(p, ec) && std::find(out.begin(), out.end(), p) == out.end())
+        out.push_back(p);
+  return out;
+}
+
 Status OmeZarrImage::read_region(uint32_t level, uint32_t channel, uint32_t timepoint, const Box3& box,
                                  std::span<uint8_t> dst) const {
   if (level >= levels_.size()) return out_of_range(root_ + ": no level " + std::to_string(level));

@@ -54,6 +54,10 @@ class OmeZarrImage {
   const std::string& version() const { return version_; }  // "0.4", "0.5", ... or "" for a bare array
   int zarr_format() const { return levels_.front().array->meta().zarr_format; }
   std::vector<std::string> warnings() const { return warnings_; }
+  // The metadata files the image was opened from (groups' and arrays'), for
+  // "outputs never touch inputs" checks. Chunk files are not listed: a large
+  // image has millions.
+  std::vector<std::string> metadata_files() const;
 
   // Reads `box` (within the level's dims) of one channel and timepoint, x
   // fastest, native byte order. Thread-safe.
