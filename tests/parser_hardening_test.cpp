@@ -253,3 +253,15 @@ TEST_CASE("hardening: a tiny PNG slice claiming 100000 x 100000 pixels is refuse
   REQUIRE_FALSE(s);
   CHECK(s.status().message().find(p.string() + ": 100000 x 100000 pixels cannot come from a") == 0);
 }
+
+TEST_CASE("hardening: an uncompressed TIFF claiming rows wider than the budget allows is refused at open") {
+  // Found by fuzz_tiff (corpus/tiff/timeout_wide_raw_rows.tif): uncompressed
+  // rows are read whole, and 2 rows of a 1.3 GB-wide page were one 2.7 GB
+  // allocation for a 1.2 KB file (an OOM, then a timeout).
+  const fs::path dir = scratch("tiff_wide_rows");
+  write_tiff_claiming(dir / "wide.tif", uint32_t(1) << 28, 2, COMPRESSION_NONE, 16);
+  auto s = open_import_source({(dir / "wide.tif").string()});
+  REQUIRE_FALSE(s);
+  CHECK(s.status().code() == ErrorCode::kOutOfRange);
+  CHECK(s.status().message().find("rows of 268435456 bytes exceed") != std::string::npos);
+}

@@ -19,6 +19,12 @@ std::string write_temp(const std::string& name, const uint8_t* data, size_t size
     std::filesystem::create_directories(d);
     return d;
   }();
+  // Registered once `dir` is fully built, so it runs before `dir` is destroyed.
+  static const bool cleanup = std::atexit([] {
+    std::error_code ec;
+    std::filesystem::remove_all(dir, ec);
+  }) == 0;
+  (void)cleanup;
   const std::string path = dir + "/" + name;
   FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) {

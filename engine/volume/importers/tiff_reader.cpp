@@ -66,6 +66,9 @@ float half_to_float(uint16_t h) {
 // The most a block of one stored byte can decode to with compression `c`: a
 // header's strip size is believed only as far as its stored bytes can pay
 // for it (a 158-byte file claiming 2 GB strips grew to 24 GB).
+// Most bytes of uncompressed rows read_region holds at once.
+constexpr uint64_t kRawScratchBytes = uint64_t(16) << 20;
+
 uint64_t max_expansion(uint16_t c) {
   switch (c) {
     case COMPRESSION_NONE: return 1;
@@ -353,6 +356,12 @@ Result<PageInfo> TiffFile::describe_current(uint32_t index) {
                         " KiB one decoded block may take (1/8 of the import memory budget, " +
                         std::to_string(import_memory_budget() >> 20) +
                         " MiB); re-save with smaller strips or tiles, or raise --memory");
+  // Uncompressed rows are read whole (read_region): one must fit the per-block share of the budget.
+  const uint64_t row_bytes = p.tiled ? TIFFTileRowSize64(tif_) : TIFFScanlineSize64(tif_);
+  if (!decoded && row_bytes > max_decoded_block_bytes())
+    return out_of_range(where + ": rows of " + std::to_string(row_bytes) + " bytes exceed the " +
+                        std::to_string(max_decoded_block_bytes() >> 10) +
+                        " KiB one read may take (1/8 of the import memory budget); the file is damaged or too wide");
   const uint32_t rows_per_block = p.block_h;
   for (uint32_t i = 0; i < need; ++i) {
     int err = 0;
@@ -508,43 +517,51 @@ Status TiffFile::read_region(const PageInfo& page, uint32_t channel, uint32_t x0
       const uint32_t bx0 = bx * page.block_w, by0 = by * page.block_h;
       const uint32_t rx0 = std::max(x0, bx0), rx1 = std::min(x0 + w, std::min(bx0 + page.block_w, page.width));
       const uint32_t ry0 = std::max(y0, by0), ry1 = std::min(y0 + h, std::min(by0 + page.block_h, page.height));
-      const uint8_t* base = nullptr;
-      uint32_t first_row = 0;  // block row that `base` starts at
-      if (raw) {
-        uint64_t off = page.raw_offset, len = row_bytes * page.height;
-        if (!virtual_page) {
-          int err = 0;
-          off = TIFFGetStrileOffsetWithErr(tif_, block, &err);
-          len = err ? 0 : TIFFGetStrileByteCountWithErr(tif_, block, &err);
-          if (err) return corrupt(path_ + ": cannot read strip/tile offsets");
-        }
-        VXR_RETURN_IF_ERROR(read_rows_raw(page, off, len, ry0 - by0, ry1 - ry0, row_bytes, scratch_));
-        base = scratch_.data();
-        first_row = ry0 - by0;
-      } else {
-        if (cached_block_ != block || cached_ifd_ != page.ifd_offset) {
-          cached_block_ = ~0u;
-          VXR_RETURN_IF_ERROR(decode_block(page, block, scratch2_));
-          cached_block_ = block;
-          cached_ifd_ = page.ifd_offset;
-        }
-        base = scratch2_.data();
-      }
-      for (uint32_t y = ry0; y < ry1; ++y) {
-        const uint8_t* row = base + uint64_t(y - by0 - first_row) * row_bytes;
-        uint8_t* out = dst + (uint64_t(y - y0) * w + (rx0 - x0)) * ob;
-        const uint64_t first = uint64_t(rx0 - bx0) * spb + soff;
-        if (!palette) {
-          extract_samples(row, first, spb, rx1 - rx0, page, out);
+      // Uncompressed rows are read whole (every column), so a page that claims
+      // very wide rows is read a few rows at a time: the scratch buffer stays
+      // near kRawScratchBytes whatever width the header claims.
+      const uint32_t batch =
+          raw ? uint32_t(std::clamp<uint64_t>(kRawScratchBytes / row_bytes, 1, ry1 - ry0)) : ry1 - ry0;
+      for (uint32_t ys = ry0; ys < ry1; ys += batch) {
+        const uint32_t ye = std::min(ry1, ys + batch);
+        const uint8_t* base = nullptr;
+        uint32_t first_row = 0;  // block row that `base` starts at
+        if (raw) {
+          uint64_t off = page.raw_offset, len = row_bytes * page.height;
+          if (!virtual_page) {
+            int err = 0;
+            off = TIFFGetStrileOffsetWithErr(tif_, block, &err);
+            len = err ? 0 : TIFFGetStrileByteCountWithErr(tif_, block, &err);
+            if (err) return corrupt(path_ + ": cannot read strip/tile offsets");
+          }
+          VXR_RETURN_IF_ERROR(read_rows_raw(page, off, len, ys - by0, ye - ys, row_bytes, scratch_));
+          base = scratch_.data();
+          first_row = ys - by0;
         } else {
-          extract_samples(row, first, spb, rx1 - rx0, index_page, idx.data());
-          const std::vector<uint16_t>& map = (*page.colormap)[channel];
-          for (uint32_t i = 0; i < rx1 - rx0; ++i) {
-            uint16_t k = idx[i];
-            if (index_page.dtype == DType::kU16) std::memcpy(&k, idx.data() + 2 * i, 2);
-            const uint16_t v = map[std::min<size_t>(k, map.size() - 1)];
-            if (ob == 1) out[i] = uint8_t(v);
-            else std::memcpy(out + 2 * i, &v, 2);
+          if (cached_block_ != block || cached_ifd_ != page.ifd_offset) {
+            cached_block_ = ~0u;
+            VXR_RETURN_IF_ERROR(decode_block(page, block, scratch2_));
+            cached_block_ = block;
+            cached_ifd_ = page.ifd_offset;
+          }
+          base = scratch2_.data();
+        }
+        for (uint32_t y = ys; y < ye; ++y) {
+          const uint8_t* row = base + uint64_t(y - by0 - first_row) * row_bytes;
+          uint8_t* out = dst + (uint64_t(y - y0) * w + (rx0 - x0)) * ob;
+          const uint64_t first = uint64_t(rx0 - bx0) * spb + soff;
+          if (!palette) {
+            extract_samples(row, first, spb, rx1 - rx0, page, out);
+          } else {
+            extract_samples(row, first, spb, rx1 - rx0, index_page, idx.data());
+            const std::vector<uint16_t>& map = (*page.colormap)[channel];
+            for (uint32_t i = 0; i < rx1 - rx0; ++i) {
+              uint16_t k = idx[i];
+              if (index_page.dtype == DType::kU16) std::memcpy(&k, idx.data() + 2 * i, 2);
+              const uint16_t v = map[std::min<size_t>(k, map.size() - 1)];
+              if (ob == 1) out[i] = uint8_t(v);
+              else std::memcpy(out + 2 * i, &v, 2);
+            }
           }
         }
       }
