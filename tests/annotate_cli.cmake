@@ -59,9 +59,11 @@ step(0 "3 markers, 1 measurements, 1 skeletons, 1 tracks, 1 ROIs, 0 cards\n.*ske
 
 step(0 "^card 1\n$" "^$" cards add ${S} --title "Spine cluster" --note "Dense spines near the soma"
      --scene ${SRC}/tests/data/card_scene.json --snapshot ${SRC}/golden_images/model_ea.png)
-step(0 "^card 2\n$" "^$" cards add ${S} --note "axon bouton")
+step(0 "^card 2\n$" "^$" cards add ${S} --note "axon bouton" --snapshot-path ${SRC}/golden_images/model_ea.png)
 step(2 "^$" "card snapshot is not a PNG file" cards add ${S} --note x --snapshot ${SRC}/tests/data/card_scene.json)
-step(0 "^1\t[0-9-]+ [0-9:]+ UTC\tSpine cluster  \\[snapshot\\]\n2\t[^\n]*\taxon bouton\n$" "^$" cards list ${S})
+step(0 "^1\t[0-9-]+ [0-9:]+ UTC\tSpine cluster  \\[snapshot\\]\n2\t[^\n]*\taxon bouton  \\[snapshot\\]\n$" "^$" cards list ${S})
+step(0 "snapshot: [^\n]*golden_images/model_ea.png\n" "^$" cards show ${S} 2)
+step(2 "^$" "--snapshot-path /nonexistent.png: no such file" cards add ${S} --snapshot-path /nonexistent.png)
 step(0 "^1\t[^\n]*Spine cluster[^\n]*\n$" "^$" cards search ${S} SPINES soma)
 step(1 "^$" "no card matches 'dendrite'" cards search ${S} dendrite)
 step(0 "title: Spine cluster\n.*note:\nDense spines near the soma\nscene:\n.*\"model\": \"mip\"" "^$" cards show ${S} 1)

@@ -272,7 +272,7 @@ Skeleton small_tree() {
 }
 }  // namespace
 
-TEST_CASE("skeleton: add refuses a missing parent or a repeated id; move changes only the position") {
+TEST_CASE("skeleton: add refuses a missing parent or a repeated id, and move changes only the position") {
   Skeleton sk = small_tree();
   SkeletonNode orphan;
   orphan.parent = 42;
@@ -289,7 +289,7 @@ TEST_CASE("skeleton: add refuses a missing parent or a repeated id; move changes
   CHECK(sk.validate().is_ok());
 }
 
-TEST_CASE("skeleton: deleting a node hands its children to its parent; deleting a root makes them roots") {
+TEST_CASE("skeleton: deleting a node hands its children to its parent, and deleting a root makes them roots") {
   Skeleton sk = small_tree();
   REQUIRE(sk.delete_node(2).is_ok());
   CHECK(sk.find(3)->parent == 1);
@@ -320,7 +320,7 @@ TEST_CASE("skeleton: reparent moves a subtree and refuses to create a cycle") {
   CHECK(sk.validate().is_ok());
 }
 
-TEST_CASE("skeleton: split detaches a subtree as a new tree; merge re-roots and attaches with fresh ids") {
+TEST_CASE("skeleton: split detaches a subtree as a new tree, and merge re-roots and attaches with fresh ids") {
   Skeleton sk = small_tree();
   auto part = sk.split(2);
   REQUIRE(part.is_ok());
@@ -434,7 +434,7 @@ TEST_CASE("store: measurement length uses the anisotropic voxel size and unit") 
   CHECK(s->set_voxel_space({{1, 1, 1}, "furlong"}).code() == ErrorCode::kInvalidArgument);
 }
 
-TEST_CASE("store: markers count per class and timepoint; CSV quotes awkward class names") {
+TEST_CASE("store: markers count per class and timepoint, and CSV quotes awkward class names") {
   auto s = open_new("markers");
   for (int i = 0; i < 7; ++i) {
     Marker m;
@@ -529,7 +529,7 @@ TEST_CASE("store: an ROI query returns exactly the annotations inside the box") 
 
 // ---------------------------------------------------------------- cards
 
-TEST_CASE("store: a card keeps its scene, note, snapshot and memo byte for byte; search matches every word") {
+TEST_CASE("store: a card keeps its scene, note, snapshot and memo byte for byte, and search matches every word") {
   const std::string dir = fresh_dir("cards");
   Scene scene;
   scene.volume = "head.vxc";
@@ -620,6 +620,31 @@ TEST_CASE("store: opening refuses a missing store, a second opener, a newer sche
   auto f = AnnotationStore::open(foreign, true);
   CHECK(f.status().code() == ErrorCode::kCorrupt);
   CHECK(f.status().message().find("is not a vxr annotation store") != std::string::npos);
+}
+
+TEST_CASE("store: a damaged write-ahead log is reported as corrupt, never skipped") {
+  const std::string dir = fresh_dir("damaged");
+  {
+    auto s = AnnotationStore::open(dir, true);
+    REQUIRE(s.is_ok());
+    for (int i = 0; i < 20; ++i) {
+      Marker m;
+      m.pos = {double(i), 0, 0};
+      REQUIRE((*s)->add_marker(m).is_ok());
+    }
+  }
+  fs::path log;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".log" && fs::file_size(e.path()) > 200) log = e.path();
+  REQUIRE_FALSE(log.empty());
+  {
+    std::fstream f(log, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(fs::file_size(log) / 2));
+    f.write("XXXXXXXX", 8);
+  }
+  auto s = AnnotationStore::open(dir, false);
+  CHECK(s.status().code() == ErrorCode::kCorrupt);
+  CHECK(s.status().message().rfind(dir + ": annotation store is damaged (Corruption: ", 0) == 0);
 }
 
 // ---------------------------------------------------------------- kill -9

@@ -432,11 +432,19 @@ void add_cards_command(CLI::App& app, Invocation& inv) {
     auto scene = std::make_shared<std::string>();
     auto snapshot = std::make_shared<std::string>();
     auto audio = std::make_shared<std::string>();
+    auto snapshot_path = std::make_shared<std::string>();
     auto* cmd = store_command(*top, inv, "add", "store a card; prints its id", store,
-                              [title, note, scene, snapshot, audio](AnnotationStore& s) {
+                              [title, note, scene, snapshot, audio, snapshot_path](AnnotationStore& s) {
                                 Card c;
                                 c.title = *title;
                                 c.note = *note;
+                                if (!snapshot_path->empty()) {
+                                  if (!snapshot->empty()) return usage("give --snapshot or --snapshot-path, not both");
+                                  std::error_code ec;
+                                  if (!fs::is_regular_file(*snapshot_path, ec))
+                                    return usage("--snapshot-path " + *snapshot_path + ": no such file");
+                                  c.snapshot_path = fs::absolute(*snapshot_path, ec).string();
+                                }
                                 if (!scene->empty()) {
                                   auto text = read_whole_file(*scene);
                                   if (!text.is_ok()) return fail(text.status(), kExitUsage);
@@ -461,6 +469,7 @@ void add_cards_command(CLI::App& app, Invocation& inv) {
     cmd->add_option("--note", *note, "text note (searchable)");
     cmd->add_option("--scene", *scene, "Scene JSON to restore (render settings, camera)");
     cmd->add_option("--snapshot", *snapshot, "PNG picture kept in the store");
+    cmd->add_option("--snapshot-path", *snapshot_path, "PNG picture left where it is; the card records its absolute path");
     cmd->add_option("--audio", *audio, "WAV voice memo kept in the store");
   }
   {

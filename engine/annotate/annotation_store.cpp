@@ -416,7 +416,7 @@ Status AnnotationStore::write_skeleton_diff(const Skeleton& before, const Skelet
 Status AnnotationStore::edit_skeleton(Id id, const std::function<Status(Skeleton&)>& edit) {
   VXR_ASSIGN_OR_RETURN(Skeleton before, skeleton(id));
   Skeleton after = before;
-  VXR_RETURN_IF_ERROR(edit(after));
+  if (Status s = edit(after); !s.is_ok()) return Status(s.code(), path_ + ": " + s.message());
   if (Status s = after.validate(); !s.is_ok()) return internal_error("skeleton edit broke the tree: " + s.message());
   leveldb::WriteBatch batch;
   VXR_RETURN_IF_ERROR(write_skeleton_diff(before, after, &batch));
