@@ -740,7 +740,16 @@ TEST_CASE("store: killed with SIGKILL at 60 random moments, every acknowledged w
         CHECK(c->snapshot_png.size() == size_t(a.seq) + 9);
       }
     }
-    if (auto sks = (*s)->skeletons(); sks.is_ok() && !sks->empty()) CHECK((*s)->skeleton(sks->front().id).is_ok());
+    // Nothing half-written either: every card present has its snapshot, every skeleton is a valid tree.
+    auto cards = (*s)->cards();
+    REQUIRE(cards.is_ok());
+    for (const Card& c : *cards) {
+      auto full = (*s)->card(c.id);
+      CHECK_MESSAGE(full.is_ok(), full.status().message());
+    }
+    auto sks = (*s)->skeletons();
+    REQUIRE(sks.is_ok());
+    for (const SkeletonInfo& k : *sks) CHECK((*s)->skeleton(k.id).is_ok());
   }
   MESSAGE(acked.size() << " acknowledged writes over 60 kills, " << kills_mid_write << " kills after at least one write");
   CHECK(kills_mid_write >= 40);
