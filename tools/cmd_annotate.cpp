@@ -353,6 +353,72 @@ void add_annotate_command(CLI::App& app, Invocation& inv) {
     cmd->add_option("--name", *name, "skeleton name (default: the file name)");
   }
   {
+    // The tracing tool's edits, one per call, each atomic and tree-preserving.
+    struct EditArgs {
+      Id skeleton = 0;
+      std::string add, to;
+      int64_t move = 0, del = 0, reparent = 0, split = 0, parent = kNoParent;
+      Id merge_from = 0;
+      int64_t from_node = 0;
+      double radius = 1.0;
+      int type = 0;
+    };
+    auto store = std::make_shared<std::string>();
+    auto a = std::make_shared<EditArgs>();
+    auto* cmd = store_command(
+        *top, inv, "edit-skeleton",
+        "one tracing edit: --add, --move, --delete, --reparent, --split or --merge-from (the tree stays valid)", store,
+        [a](AnnotationStore& s) {
+          const int actions = !a->add.empty() + (a->move > 0) + (a->del > 0) + (a->reparent > 0) + (a->split > 0) + (a->merge_from > 0);
+          if (actions != 1) return usage("edit-skeleton: give exactly one of --add, --move, --delete, --reparent, --split, --merge-from");
+          Status st;
+          if (!a->add.empty()) {
+            auto p = parse_point("--add", a->add);
+            if (!p.is_ok()) return fail(p.status(), kExitUsage);
+            auto id = s.add_node(a->skeleton, {0, *p, a->radius, a->type, a->parent});
+            if (!id.is_ok()) return fail_status(id.status());
+            std::printf("node %lld\n", (long long)*id);
+            return kExitOk;
+          }
+          if (a->move > 0) {
+            auto p = parse_point("--to", a->to);
+            if (!p.is_ok()) return fail(p.status(), kExitUsage);
+            st = s.move_node(a->skeleton, a->move, *p);
+          } else if (a->del > 0) {
+            st = s.delete_node(a->skeleton, a->del);
+          } else if (a->reparent > 0) {
+            st = s.reparent_node(a->skeleton, a->reparent, a->parent);
+          } else if (a->split > 0) {
+            auto id = s.split_skeleton(a->skeleton, a->split);
+            if (!id.is_ok()) return fail_status(id.status());
+            std::printf("skeleton %llu\n", (unsigned long long)*id);
+            return kExitOk;
+          } else {
+            if (a->from_node <= 0) return usage("--merge-from: give --from-node, the node of that skeleton to attach");
+            auto map = s.merge_skeletons(a->skeleton, a->parent, a->merge_from, a->from_node);
+            if (!map.is_ok()) return fail_status(map.status());
+            std::printf("merged %zu nodes into skeleton %llu; node %lld is now %lld\n", map->size(),
+                        (unsigned long long)a->skeleton, (long long)a->from_node, (long long)map->at(a->from_node));
+            return kExitOk;
+          }
+          if (!st.is_ok()) return fail_status(st);
+          std::printf("ok\n");
+          return kExitOk;
+        });
+    cmd->add_option("--skeleton", a->skeleton, "skeleton id")->required();
+    cmd->add_option("--add", a->add, "add a node at x,y,z (voxels) under --parent; prints its id");
+    cmd->add_option("--move", a->move, "move node N to --to x,y,z");
+    cmd->add_option("--to", a->to, "new position for --move");
+    cmd->add_option("--delete", a->del, "delete node N; its children join its parent");
+    cmd->add_option("--reparent", a->reparent, "attach node N (and its subtree) under --parent");
+    cmd->add_option("--split", a->split, "move the subtree at node N into a new skeleton; prints its id");
+    cmd->add_option("--merge-from", a->merge_from, "move skeleton S into this one, --from-node hung under --parent");
+    cmd->add_option("--from-node", a->from_node, "with --merge-from: the node that becomes the attached root");
+    cmd->add_option("--parent", a->parent, "parent node id, -1 for a root (default -1)");
+    cmd->add_option("--radius", a->radius, "with --add: radius in the store's unit (default 1)");
+    cmd->add_option("--type", a->type, "with --add: SWC type (default 0)");
+  }
+  {
     auto store = std::make_shared<std::string>();
     auto skel = std::make_shared<Id>(0);
     auto out = std::make_shared<std::string>();
