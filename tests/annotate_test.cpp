@@ -68,7 +68,9 @@ std::set<SwcWarningKind> kinds(const SwcFile& f) {
   return out;
 }
 
-double dist(const Vec3& a, const Vec3& b) { return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); }
+double dist(const Vec3& a, const Vec3& b) {
+  return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+}
 
 // Same tree: `b` is `a` renumbered by `map` (a id -> b id), same coordinates within tol.
 void check_same_tree(const Skeleton& a, const Skeleton& b, const std::map<int64_t, int64_t>& map, double tol) {
@@ -244,7 +246,8 @@ TEST_CASE("swc: every file in testdata/swc-malformed loads with warnings or fail
     auto f = read_swc(path);
     if (f.is_ok()) {
       CHECK_FALSE(f->warnings.empty());
-      for (const SwcWarning& w : f->warnings) CHECK(w.message.rfind(path + ":" + std::to_string(w.line) + ": ", 0) == 0);
+      for (const SwcWarning& w : f->warnings)
+        CHECK(w.message.rfind(path + ":" + std::to_string(w.line) + ": ", 0) == 0);
       CHECK(skeleton_from_swc(*f).validate().is_ok());
     } else {
       CHECK(f.status().message().rfind(path + ":", 0) == 0);
@@ -588,7 +591,8 @@ TEST_CASE("store: opening refuses a missing store, a second opener, a newer sche
   const std::string missing = fresh_dir("missing");
   auto none = AnnotationStore::open(missing, false);
   CHECK(none.status().code() == ErrorCode::kNotFound);
-  CHECK(none.status().message() == missing + ": no annotation store here (create one with `vxr annotate init " + missing + "`)");
+  CHECK(none.status().message() ==
+        missing + ": no annotation store here (create one with `vxr annotate init " + missing + "`)");
 
   const std::string dir = fresh_dir("schema");
   {
@@ -606,7 +610,8 @@ TEST_CASE("store: opening refuses a missing store, a second opener, a newer sche
   }
   auto newer = AnnotationStore::open(dir, false);
   CHECK(newer.status().code() == ErrorCode::kUnsupported);
-  CHECK(newer.status().message() == dir + ": annotation store schema version 2 is newer than this vxr reads (version 1); open it with a newer vxr");
+  CHECK(newer.status().message() ==
+        dir + ": annotation store schema version 2 is newer than this vxr reads (version 1); open it with a newer vxr");
 
   const std::string foreign = fresh_dir("foreign");
   {
@@ -751,6 +756,7 @@ TEST_CASE("store: killed with SIGKILL at 60 random moments, every acknowledged w
     REQUIRE(sks.is_ok());
     for (const SkeletonInfo& k : *sks) CHECK((*s)->skeleton(k.id).is_ok());
   }
-  MESSAGE(acked.size() << " acknowledged writes over 60 kills, " << kills_mid_write << " kills after at least one write");
+  MESSAGE(acked.size() << " acknowledged writes over 60 kills, " << kills_mid_write
+                       << " kills after at least one write");
   CHECK(kills_mid_write >= 40);
 }
