@@ -150,6 +150,10 @@ TEST_CASE("swc: broken lines are one error naming file and line, never a crash")
   CHECK(loop.status().message().rfind("d.swc:", 0) == 0);
   auto self = parse_swc("1 1 0 0 0 1 1\n", "e.swc");
   CHECK(self.status().message() == "e.swc:1: sample 1 is its own parent");
+  auto empty = parse_swc("# only a comment\r\n\n", "f.swc");
+  CHECK(empty.status().message() == "f.swc: no samples (lines of id type x y z radius parent); is this an SWC file?");
+  auto binary = parse_swc("\x89PNG\x01 1 2 3 4 5 6\n", "g.swc");
+  CHECK(binary.status().message() == "g.swc:1: id '?PNG?' is not a number");
   auto missing = read_swc("/nonexistent/x.swc");
   CHECK(missing.status().message() == "/nonexistent/x.swc: no such file");
 }

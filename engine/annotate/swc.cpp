@@ -66,6 +66,13 @@ bool parse_integer(std::string_view tok, int64_t* out) {
   return true;
 }
 
+// A token as it may be quoted in a message: binary input must not reach the terminal raw.
+std::string printable(std::string_view tok) {
+  std::string out;
+  for (char c : tok.substr(0, 24)) out += (c >= 0x20 && c < 0x7f) ? c : '?';
+  return tok.size() > 24 ? out + "..." : out;
+}
+
 std::string fmt_num(double v) {
   char buf[64];
   const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
@@ -111,7 +118,7 @@ Result<SwcFile> parse_swc(const std::string& text, const std::string& name) {
     double v[7];
     for (int c = 0; c < 7; ++c) {
       if (!parse_double(tok[c], &v[c])) {
-        return invalid_argument(where(line_no) + kColumns[c] + " '" + std::string(tok[c]) + "' is not a number");
+        return invalid_argument(where(line_no) + kColumns[c] + " '" + printable(tok[c]) + "' is not a number");
       }
     }
     int64_t type = 0;
@@ -125,6 +132,8 @@ Result<SwcFile> parse_swc(const std::string& text, const std::string& name) {
     file.samples.push_back(s);
   }
 
+  if (file.samples.empty())
+    return invalid_argument(name + ": no samples (lines of id type x y z radius parent); is this an SWC file?");
   // Ids must be unique: a repeated id makes every reference to it ambiguous.
   std::unordered_map<int64_t, size_t> index;
   for (size_t i = 0; i < file.samples.size(); ++i) {
