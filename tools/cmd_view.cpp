@@ -107,7 +107,8 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   auto* fh = cmd->add_flag("--headless", o->force_headless, "render without a display");
   fx->excludes(fd, fh);
   fd->excludes(fh);
-  cmd->add_option("--frames", o->frames, "render N frames, then exit cleanly (0: until closed)");
+  cmd->add_option("--frames", o->frames, "render N frames, then exit cleanly (0: until closed)")
+      ->check(CLI::Range(uint64_t(0), uint64_t(10000000)));
   cmd->add_option("--script", o->script, "headless: pose script (JSON; see xr/script.h)");
   cmd->add_option("--png-dir", o->png_dir, "headless: write the eye images of the last frame here");
   cmd->add_flag("--png-every-frame", o->png_every_frame, "headless: write every frame's eye images");
