@@ -34,6 +34,8 @@ namespace {
 struct Options {
   std::string input, output, settings_path, camera, size = "512x512", model, colormap, window, path = "compute";
   std::string renderer;  // "" = lod for chunk sources (.vxc, OME-Zarr) and procedural: inputs, dense otherwise
+  std::string channel;   // "" = the first (up to 4) channels; else a comma list of channel indices
+  uint32_t timepoint = 0;
   double fov = 0.0, step = 0.0, reference_step = 1.0 / 16.0;
   double lod_bias = 0.0, frame_budget_ms = 0.0;
   bool lod_bias_given = false;
@@ -98,6 +100,54 @@ std::pair<double, double> auto_window(const DenseVolume& v) {
   return {lo, hi};
 }
 
+// --channel "2" or "0,2": the volume's channels to draw (at most 4, each once).
+Result<std::vector<uint32_t>> parse_channels(const std::string& text, uint32_t volume_channels) {
+  std::vector<uint32_t> out;
+  if (text.empty()) {
+    for (uint32_t c = 0; c < std::min<uint32_t>(volume_channels, VXR_MAX_CHANNELS); ++c) out.push_back(c);
+    return out;
+  }
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    char* end = nullptr;
+    const unsigned long c = std::strtoul(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || c >= volume_channels)
+      return invalid_argument("--channel: '" + item + "' is not a channel of this volume (0.." +
+                              std::to_string(volume_channels - 1) + ")");
+    if (std::find(out.begin(), out.end(), uint32_t(c)) != out.end())
+      return invalid_argument("--channel: channel " + item + " is named twice");
+    out.push_back(uint32_t(c));
+  }
+  if (out.size() > VXR_MAX_CHANNELS)
+    return invalid_argument("--channel: at most " + std::to_string(VXR_MAX_CHANNELS) + " channels are drawn together");
+  return out;
+}
+
+// Channels without settings get their own: single-hue colours (a copy of
+// channel 0's settings otherwise, window included); windows from
+// `auto_window_of(c)` unless --window/--settings gave one. The same rule for
+// both renderers.
+void complete_channel_settings(RenderSettings& s, size_t n, bool window_given, bool colormap_given,
+                               const std::function<std::pair<double, double>(size_t)>& auto_window_of) {
+  const char* hues[4] = {"green", "magenta", "cyan", "yellow"};
+  for (size_t c = s.channels.size(); c < n; ++c) {
+    ChannelSettings ch = s.channels[0];
+    ch.colormap = n > 1 ? hues[c] : ch.colormap;
+    ch.color_points.clear();
+    s.channels.push_back(ch);
+  }
+  if (s.channels.size() > n) s.channels.resize(n);
+  if (n > 1 && !colormap_given && s.channels[0].colormap == "gray") s.channels[0].colormap = hues[0];
+  for (size_t c = 0; c < n && !window_given; ++c) {
+    auto [lo, hi] = auto_window_of(c);
+    s.channels[c].window_lo = lo;
+    s.channels[c].window_hi = hi;
+  }
+  if (s.iso_value == RenderSettings{}.iso_value && !window_given)
+    s.iso_value = 0.5 * (s.channels[0].window_lo + s.channels[0].window_hi);
+}
+
 Result<std::string> read_text(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) return not_found(path + ": cannot open the settings file");
@@ -132,27 +182,33 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
     src = std::move(r->source);
   }
   const VolumeInfo& info = src->info();
-  if (info.dtype != DType::kU8 && info.dtype != DType::kU16)
-    return fail(invalid_argument(o.input + ": the out-of-core renderer draws u8 or u16 data, this is " +
-                                 dtype_name(info.dtype) + "; use --renderer dense"),
+  auto drawn = parse_channels(o.channel, info.channels);
+  if (!drawn) return fail(drawn.status(), kExitUsage);
+  if (o.timepoint >= info.timepoints)
+    return fail(invalid_argument("--timepoint: " + std::to_string(o.timepoint) + ", but " + o.input + " has " +
+                                 std::to_string(info.timepoints) + " timepoint(s) (0.." +
+                                 std::to_string(info.timepoints - 1) + ")"),
                 kExitUsage);
-  if (info.channels > 1 || info.timepoints > 1)
-    std::fprintf(stderr, "vxr: note: %s: the out-of-core renderer draws channel 0 of timepoint 0 (of %u channels, %u "
-                         "timepoints); --renderer dense draws all channels\n",
-                 o.input.c_str(), info.channels, info.timepoints);
-  if (!window_given) {
-    // Percentiles of a level small enough to read whole (~2 M voxels).
-    const uint32_t level = finest_level_that_fits(*src, 4096, uint64_t(2) << 20);
-    auto dense = read_level_dense(*src, level, 0, 0, uint64_t(64) << 20);
-    if (!dense) return fail(dense.status());
-    auto [lo, hi] = auto_window(*dense);
-    s.channels[0].window_lo = lo;
-    s.channels[0].window_hi = hi;
-  }
-  if (Status st = validate_render_settings(s, 1); !st) return fail(st, kExitUsage);
-  if (Status st = check_brick_settings(s); !st) return fail(st, kExitUsage);
+  if (info.channels > VXR_MAX_CHANNELS && o.channel.empty())
+    std::fprintf(stderr, "vxr: note: %s has %u channels; drawing 0..%d (choose with --channel)\n", o.input.c_str(),
+                 info.channels, VXR_MAX_CHANNELS - 1);
+  // Percentiles of a level small enough to read whole (~2 M voxels).
+  const uint32_t window_level = finest_level_that_fits(*src, 4096, uint64_t(2) << 20);
+  Status window_error = Status::ok();
+  complete_channel_settings(s, drawn->size(), window_given, !o.colormap.empty(), [&](size_t c) {
+    auto dense = read_level_dense(*src, window_level, (*drawn)[c], o.timepoint, uint64_t(64) << 20);
+    if (!dense) {
+      window_error = dense.status();
+      return std::pair<double, double>(0.0, 1.0);
+    }
+    return auto_window(*dense);
+  });
+  if (!window_error) return fail(window_error);
+  if (Status st = check_brick_settings(s, static_cast<uint32_t>(drawn->size())); !st) return fail(st, kExitUsage);
 
-  auto renderer = BrickRenderer::create(gpu, *src);
+  BrickRendererOptions ro;
+  ro.pool.channels = *drawn;
+  auto renderer = BrickRenderer::create(gpu, *src, ro);
   if (!renderer) return fail(renderer.status());
   BrickRenderer& r = **renderer;
   const VolumePlacement placement = r.placement();
@@ -161,6 +217,7 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
 
   BrickFrameSettings frame;
   frame.lod.lod_bias = o.lod_bias;
+  frame.lod.timepoint = o.timepoint;
   const bool budget = o.frame_budget_ms > 0.0;
   FrameBudget controller;
   controller.target_ms = o.frame_budget_ms;
@@ -297,6 +354,10 @@ int run(const Options& o) {
   // The reference marches every sample in double on the CPU: below 1/256 voxel it would run for days.
   if (o.reference && !(o.reference_step >= 1.0 / 256 && o.reference_step <= 64.0))
     return fail(invalid_argument("--reference-step: must be within 1/256..64 voxels (default 1/16)"), kExitUsage);
+  if (renderer == "dense" && o.timepoint != 0)
+    return fail(invalid_argument("--timepoint: the dense renderer loads timepoint 0 only; draw other timepoints "
+                                 "out of core (a .vxc from `vxr import`, --renderer lod)"),
+                kExitUsage);
   if (!std::isfinite(o.lod_bias) || std::abs(o.lod_bias) > 16.0)
     return fail(invalid_argument("--lod-bias: must be within -16..16 (log2 of voxels per pixel)"), kExitUsage);
 
@@ -344,25 +405,15 @@ int run(const Options& o) {
   if (!loaded) return fail(loaded.status());
   for (const auto& note : loaded->notes) std::fprintf(stderr, "vxr: note: %s\n", note.c_str());
   std::vector<DenseVolume>& channels = loaded->channels;
-
-  // Channels without settings get their own: single-hue colours, auto windows.
-  const char* hues[4] = {"green", "magenta", "cyan", "yellow"};
-  for (size_t c = s.channels.size(); c < channels.size(); ++c) {
-    ChannelSettings ch = s.channels[0];
-    ch.colormap = channels.size() > 1 ? hues[c] : ch.colormap;
-    ch.color_points.clear();
-    s.channels.push_back(ch);
+  if (!o.channel.empty()) {
+    auto drawn = parse_channels(o.channel, static_cast<uint32_t>(channels.size()));
+    if (!drawn) return fail(drawn.status(), kExitUsage);
+    std::vector<DenseVolume> picked;
+    for (uint32_t c : *drawn) picked.push_back(std::move(channels[c]));
+    channels = std::move(picked);
   }
-  if (channels.size() > 1 && o.colormap.empty() && s.channels[0].colormap == "gray") s.channels[0].colormap = hues[0];
-  for (size_t c = 0; c < channels.size(); ++c)
-    if (!window_given || c > 0) {
-      auto [lo, hi] = auto_window(channels[c]);
-      if (c > 0 && window_given) continue;
-      s.channels[c].window_lo = lo;
-      s.channels[c].window_hi = hi;
-    }
-  if (s.iso_value == RenderSettings{}.iso_value && !window_given)
-    s.iso_value = 0.5 * (s.channels[0].window_lo + s.channels[0].window_hi);
+  complete_channel_settings(s, channels.size(), window_given, !o.colormap.empty(),
+                            [&](size_t c) { return auto_window(channels[c]); });
   if (Status st = validate_render_settings(s, static_cast<uint32_t>(channels.size())); !st) return fail(st, kExitUsage);
 
   const VolumePlacement placement{channels[0].dims, channels[0].voxel_size};
@@ -410,6 +461,8 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--colormap", o->colormap, "gray, viridis, magma, inferno, plasma, turbo, hot, red, green, blue, cyan, magenta, yellow");
   cmd->add_option("--window", o->window, "lo,hi in data units (default: 0.5..99.5 percentiles)");
   cmd->add_option("--step", o->step, "sample step in voxels");
+  cmd->add_option("--channel", o->channel, "channels to draw, e.g. 2 or 0,2 (default: the first up to 4)");
+  cmd->add_option("--timepoint", o->timepoint, "timepoint to draw (default 0; out-of-core renderer)");
   cmd->add_option("--path", o->path, "compute (default) or fragment");
   cmd->add_option("--renderer", o->renderer,
                   "lod (out-of-core bricks; default for .vxc, OME-Zarr and procedural:vessels:SIDE) or dense (whole volume)");
