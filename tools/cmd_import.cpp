@@ -120,6 +120,16 @@ int run_import(const ImportArgs& a) {
 
 }  // namespace
 
+int import_volume(const std::vector<std::string>& inputs, const std::string& output, const std::string& voxel_size,
+                  const std::string& unit) {
+  ImportArgs a;
+  a.inputs = inputs;
+  a.output = output;
+  a.voxel_size = voxel_size;
+  a.unit = unit;
+  return run_import(a);
+}
+
 void add_import_command(CLI::App& app, Invocation& inv) {
   auto args = std::make_shared<ImportArgs>();
   auto* cmd = app.add_subcommand("import", "convert image files (raw+JSON, TIFF, OME-Zarr, ...) into a .vxc container with its "
