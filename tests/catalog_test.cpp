@@ -7,8 +7,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "annotate/annotation_store.h"
@@ -24,7 +24,9 @@ namespace {
 
 const std::string kData = VXR_TESTDATA_DIR;
 
-std::string q(const fs::path& p) { return shell_quote(p.string()); }
+std::string q(const fs::path& p) {
+  return shell_quote(p.string());
+}
 
 CliRun vxr_ok(const std::string& args, const fs::path& dir) {
   CliRun r = run_vxr(args, dir, 120);
@@ -54,7 +56,8 @@ TestProject make_project(const fs::path& dir, const std::string& name, int rende
   for (int i = 0; i < 3; ++i) {
     p.titles.push_back("View " + std::to_string(i) + " <b>&amp;</b>");
     p.notes.push_back("Note " + std::to_string(i) + ": ventricle \"left\" & 'right' < 3 mm");
-    const std::string meta = " --card-title " + shell_quote(p.titles.back()) + " --card-note " + shell_quote(p.notes.back());
+    const std::string meta =
+        " --card-title " + shell_quote(p.titles.back()) + " --card-note " + shell_quote(p.notes.back());
     if (i < rendered) {
       p.snapshots.push_back(dir / ("shot" + std::to_string(i) + ".png"));
       vxr_ok("render " + q(p.folder / "volume.vxc") + " -o " + q(p.snapshots.back()) +
@@ -69,20 +72,27 @@ TestProject make_project(const fs::path& dir, const std::string& name, int rende
   }
   p.titles.push_back("Plain note only");
   p.notes.push_back("A card with no snapshot.\nSecond line.");
-  vxr_ok("cards add " + q(store) + " --title " + shell_quote(p.titles.back()) + " --note " + shell_quote(p.notes.back()),
-         dir);
+  vxr_ok(
+      "cards add " + q(store) + " --title " + shell_quote(p.titles.back()) + " --note " + shell_quote(p.notes.back()),
+      dir);
   return p;
 }
 
 std::string html_escape(const std::string& s) {
   std::string o;
   for (char c : s) {
-    if (c == '&') o += "&amp;";
-    else if (c == '<') o += "&lt;";
-    else if (c == '>') o += "&gt;";
-    else if (c == '"') o += "&quot;";
-    else if (c == '\'') o += "&#39;";
-    else o += c;
+    if (c == '&')
+      o += "&amp;";
+    else if (c == '<')
+      o += "&lt;";
+    else if (c == '>')
+      o += "&gt;";
+    else if (c == '"')
+      o += "&quot;";
+    else if (c == '\'')
+      o += "&#39;";
+    else
+      o += c;
   }
   return o;
 }
@@ -117,8 +127,8 @@ TEST_CASE("cards: a card saved by vxr render --save-card renders bit-identical t
   const fs::path store = dir / "store";
   vxr_ok("annotate init " + q(store), dir);
   vxr_ok("render " + q(vxc) + " -o " + q(dir / "a.png") +
-             " --size 80x64 --timepoint 3 --channel 1 --camera 0.4,0.3,2,0,0,0,0,1,0 --model mip --save-card " + q(store) +
-             " --card-title first",
+             " --size 80x64 --timepoint 3 --channel 1 --camera 0.4,0.3,2,0,0,0,0,1,0 --model mip --save-card " +
+             q(store) + " --card-title first",
          dir);
   // Restored with no volume and no flags: everything comes from the card.
   vxr_ok("render --card " + q(store.string() + ":1") + " -o " + q(dir / "b.png"), dir);
@@ -147,7 +157,8 @@ TEST_CASE("cards: a card saved by vxr render --save-card renders bit-identical t
     f << scene_to_json(moved);
   }
   vxr_ok("render " + q(vxc) + " -o " + q(dir / "m.png") + " --settings " + q(dir / "moved.json") +
-             " --size 80x64 --camera 0.4,0.3,2,0,0,0,0,1,0 --model mip --channel 1 --timepoint 3 --save-card " + q(store),
+             " --size 80x64 --camera 0.4,0.3,2,0,0,0,0,1,0 --model mip --channel 1 --timepoint 3 --save-card " +
+             q(store),
          dir);
   CHECK(read_bytes(dir / "m.png") != read_bytes(dir / "a.png"));  // the transform moved the picture
   vxr_ok("render --card " + q(store.string() + ":2") + " -o " + q(dir / "m2.png"), dir);
@@ -234,8 +245,9 @@ TEST_CASE("catalog: index.html loads in headless Chromium with no console errors
   TestProject a = make_project(dir, "alpha", /*rendered=*/0);
   vxr_ok("catalog " + q(a.folder) + " -o " + q(dir / "site"), dir);
   const std::string url = "file://" + fs::absolute(dir / "site" / "index.html").string();
-  const std::string common = chromium + " --headless --disable-gpu --no-sandbox --no-first-run --user-data-dir=" +
-                             q(dir / "profile") + " --enable-logging=stderr --v=0 ";
+  const std::string common =
+      chromium + " --headless --disable-gpu --no-sandbox --no-first-run --user-data-dir=" + q(dir / "profile") +
+      " --enable-logging=stderr --v=0 ";
   // The DOM after scripts ran (--virtual-time-budget lets the load event fire first).
   const std::string dom_cmd = "timeout 60 " + common + "--virtual-time-budget=2000 --dump-dom " + q(url) + " >" +
                               q(dir / "dom.html") + " 2>" + q(dir / "dom.err");
@@ -256,8 +268,9 @@ TEST_CASE("catalog: index.html loads in headless Chromium with no console errors
   }
   // The screenshot shows the page: the dark header, white cards and the thumbnails, not a blank page.
   const fs::path shot = dir / "shot.png";
-  const std::string shot_cmd = "timeout 60 " + common + "--virtual-time-budget=2000 --window-size=1000,700 --screenshot=" +
-                               q(shot) + " " + q(url) + " >/dev/null 2>" + q(dir / "shot.err");
+  const std::string shot_cmd = "timeout 60 " + common +
+                               "--virtual-time-budget=2000 --window-size=1000,700 --screenshot=" + q(shot) + " " +
+                               q(url) + " >/dev/null 2>" + q(dir / "shot.err");
   REQUIRE(std::system(shot_cmd.c_str()) == 0);
   auto img = read_png(shot.string());
   REQUIRE(img.is_ok());
@@ -270,7 +283,7 @@ TEST_CASE("catalog: index.html loads in headless Chromium with no console errors
       colours.insert(uint32_t(px[0]) << 16 | uint32_t(px[1]) << 8 | px[2]);
       if (px[0] < 60 && px[1] < 60 && px[2] < 60) ++dark;
     }
-  CHECK(colours.size() > 50);                                  // text, thumbnails, background: not one flat colour
-  CHECK(dark > size_t(img->width) * 40);                       // the header bar and the black thumbnail frames
-  CHECK(dark < size_t(img->width) * img->height / 2);          // ... but not a black page
+  CHECK(colours.size() > 50);                          // text, thumbnails, background: not one flat colour
+  CHECK(dark > size_t(img->width) * 40);               // the header bar and the black thumbnail frames
+  CHECK(dark < size_t(img->width) * img->height / 2);  // ... but not a black page
 }
