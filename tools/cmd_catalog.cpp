@@ -30,12 +30,23 @@ std::string esc(const std::string& s) {
   o.reserve(s.size());
   for (char c : s) {
     switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      case '\'': o += "&#39;"; break;
-      default: o += c;
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      case '\'':
+        o += "&#39;";
+        break;
+      default:
+        o += c;
     }
   }
   return o;
@@ -154,10 +165,12 @@ std::string page(const std::vector<Loaded>& projects, const std::vector<Entry>& 
        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
        "<title>vxr catalogue</title>\n<link rel=\"stylesheet\" href=\"catalog.css\">\n</head>\n<body>\n";
   h += "<header><h1>vxr catalogue</h1><span class=\"count\">" + std::to_string(entries.size()) + " card(s) in " +
-       std::to_string(projects.size()) + " project(s)</span>\n"
+       std::to_string(projects.size()) +
+       " project(s)</span>\n"
        "<nav><button id=\"show-grid\" type=\"button\" aria-pressed=\"true\">Grid</button> "
        "<button id=\"show-timeline\" type=\"button\" aria-pressed=\"false\">Timeline</button></nav>\n"
-       "<input id=\"filter\" type=\"search\" placeholder=\"Filter cards\" aria-label=\"Filter cards\"></header>\n<main>\n";
+       "<input id=\"filter\" type=\"search\" placeholder=\"Filter cards\" aria-label=\"Filter "
+       "cards\"></header>\n<main>\n";
   auto search_text = [&](const Entry& e) {
     const Loaded& p = projects[e.project];
     std::string t = e.card.title + " " + e.card.note + " " + p.info.name;
@@ -182,8 +195,8 @@ std::string page(const std::vector<Loaded>& projects, const std::vector<Entry>& 
       ++n;
       const std::string title = title_of(e.card);
       h += "<article class=\"card\" id=\"card-" + std::to_string(pi) + "-" + std::to_string(e.card.id) +
-           "\" data-search=\"" + search_text(e) + "\">" + thumb_html(e, title) + "<div class=\"body\"><h3>" + esc(title) +
-           "</h3><time datetime=\"" + utc(e.card.created_unix, "%Y-%m-%dT%H:%M:%SZ") + "\">" +
+           "\" data-search=\"" + search_text(e) + "\">" + thumb_html(e, title) + "<div class=\"body\"><h3>" +
+           esc(title) + "</h3><time datetime=\"" + utc(e.card.created_unix, "%Y-%m-%dT%H:%M:%SZ") + "\">" +
            utc(e.card.created_unix, "%Y-%m-%d %H:%M UTC") + "</time>";
       if (!e.card.note.empty()) h += "<p class=\"note\">" + esc(e.card.note) + "</p>";
       h += "</div></article>\n";
@@ -233,8 +246,9 @@ int run_catalog(const std::vector<std::string>& names, const std::string& out) {
     std::error_code ec;
     const fs::path o = fs::weakly_canonical(out, ec), root = fs::weakly_canonical(l.folder, ec);
     if (o == root || o.string().rfind(root.string() + "/", 0) == 0)
-      return fail(invalid_argument("-o " + out + ": inside the project " + l.folder + "; write the catalogue elsewhere"),
-                  kExitUsage);
+      return fail(
+          invalid_argument("-o " + out + ": inside the project " + l.folder + "; write the catalogue elsewhere"),
+          kExitUsage);
     inputs.push_back((fs::path(l.folder) / "project.json").string());
     projects.push_back(std::move(l));
   }

@@ -39,15 +39,16 @@ void seed_voxel_space(AnnotationStore& store, const std::string& volume) {
   if (!src) return;
   const VolumeInfo& info = src->source->info();
   if (info.unit != "um" && info.unit != "nm" && info.unit != "mm") {
-    std::fprintf(stderr, "vxr: note: the volume's unit '%s' is not um, nm or mm; annotation lengths are in voxels "
-                 "until `vxr annotate init STORE --voxel-size X,Y,Z --unit um` sets one\n", info.unit.c_str());
+    std::fprintf(stderr,
+                 "vxr: note: the volume's unit '%s' is not um, nm or mm; annotation lengths are in voxels "
+                 "until `vxr annotate init STORE --voxel-size X,Y,Z --unit um` sets one\n",
+                 info.unit.c_str());
     return;
   }
   VoxelSpace vs;
   vs.voxel_size = {info.voxel_size[0], info.voxel_size[1], info.voxel_size[2]};
   vs.unit = info.unit;
-  if (Status st = store.set_voxel_space(vs); !st.is_ok())
-    std::fprintf(stderr, "vxr: note: %s\n", st.message().c_str());
+  if (Status st = store.set_voxel_space(vs); !st.is_ok()) std::fprintf(stderr, "vxr: note: %s\n", st.message().c_str());
 }
 
 int run_create(const CreateArgs& a) {
@@ -119,7 +120,8 @@ Result<std::vector<fs::path>> project_files(const fs::path& root) {
   for (auto it = fs::recursive_directory_iterator(root, ec); !ec && it != fs::recursive_directory_iterator();
        it.increment(ec)) {
     const auto st = it->symlink_status(ec);
-    if (fs::is_symlink(st)) return invalid_argument(it->path().string() + ": a symbolic link; projects hold plain files only");
+    if (fs::is_symlink(st))
+      return invalid_argument(it->path().string() + ": a symbolic link; projects hold plain files only");
     if (fs::is_regular_file(st)) files.push_back(it->path());
   }
   if (ec) return io_error(root.string() + ": cannot list the folder (" + ec.message() + ")");
@@ -146,7 +148,8 @@ int run_pack(const std::string& name, std::string out) {
   if (!tmp) return fail(tmp.status());
   archive* a = archive_write_new();
   auto zip_error = [&](const std::string& what) {
-    const std::string msg = out + ": " + what + " (" + (archive_error_string(a) ? archive_error_string(a) : "zip error") + ")";
+    const std::string msg =
+        out + ": " + what + " (" + (archive_error_string(a) ? archive_error_string(a) : "zip error") + ")";
     archive_write_free(a);
     return fail(io_error(msg));
   };
@@ -164,8 +167,10 @@ int run_pack(const std::string& name, std::string out) {
       return fail(io_error(f.string() + ": cannot read it (" + std::strerror(errno) + ")"));
     }
     // The volume's chunks are LZ4 already: storing them is as small and much faster.
-    if (rel == info->volume) archive_write_zip_set_compression_store(a);
-    else archive_write_zip_set_compression_deflate(a);
+    if (rel == info->volume)
+      archive_write_zip_set_compression_store(a);
+    else
+      archive_write_zip_set_compression_deflate(a);
     archive_entry* e = archive_entry_new();
     archive_entry_set_pathname(e, (top + "/" + rel).c_str());
     archive_entry_set_filetype(e, AE_IFREG);

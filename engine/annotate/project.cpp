@@ -1,9 +1,8 @@
 #include "annotate/project.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 
 #include "annotate/file_io.h"
 
@@ -13,15 +12,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 std::string project_to_json(const ProjectInfo& p) {
-  const json j = {{"format", "vxr-project"},
-                  {"version", p.version},
-                  {"name", p.name},
-                  {"description", p.description},
-                  {"tags", p.tags},
-                  {"created", p.created_unix},
-                  {"sources", p.sources},
-                  {"volume", p.volume},
-                  {"annotations", p.annotations}};
+  const json j = {{"format", "vxr-project"},      {"version", p.version}, {"name", p.name},
+                  {"description", p.description}, {"tags", p.tags},       {"created", p.created_unix},
+                  {"sources", p.sources},         {"volume", p.volume},   {"annotations", p.annotations}};
   return j.dump(2) + "\n";
 }
 
@@ -49,7 +42,7 @@ Result<ProjectInfo> project_from_json(const std::string& text, const std::string
     p.version = j.at("version").get<int>();
     if (p.version > ProjectInfo::kVersion)
       return unsupported(origin + ": project version " + std::to_string(p.version) +
-                                                 " is newer than this vxr reads (version 1); open it with a newer vxr");
+                         " is newer than this vxr reads (version 1); open it with a newer vxr");
     if (p.version < 1) return invalid_argument(origin + ": \"version\" must be 1 or more");
     p.name = j.value("name", std::string());
     p.description = j.value("description", std::string());

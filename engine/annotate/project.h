@@ -15,11 +15,11 @@ namespace vxr::annotate {
 struct ProjectInfo {
   static constexpr int kVersion = 1;
   int version = kVersion;
-  std::string name;                  // NAME, without the .vxr suffix
+  std::string name;  // NAME, without the .vxr suffix
   std::string description;
   std::vector<std::string> tags;
-  int64_t created_unix = 0;          // seconds since 1970, UTC
-  std::vector<std::string> sources;  // the raw files imported, absolute paths at creation
+  int64_t created_unix = 0;                 // seconds since 1970, UTC
+  std::vector<std::string> sources;         // the raw files imported, absolute paths at creation
   std::string volume = "volume.vxc";        // relative to the project folder
   std::string annotations = "annotations";  // relative to the project folder
   bool operator==(const ProjectInfo&) const = default;
