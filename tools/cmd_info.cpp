@@ -9,6 +9,21 @@
 namespace vxr::cli {
 namespace {
 
+// The fields every `info --json` has, whatever holds the volume.
+nlohmann::json volume_info_json(const VolumeInfo& i) {
+  return {{"dims", {i.dims[0], i.dims[1], i.dims[2]}},
+          {"dtype", dtype_name(i.dtype)},
+          {"channels", i.channels},
+          {"timepoints", i.timepoints},
+          {"voxel_size", {i.voxel_size[0], i.voxel_size[1], i.voxel_size[2]}},
+          {"unit", i.unit}};
+}
+
+// Units and paths come from files: bytes that are not UTF-8 print as U+FFFD instead of throwing.
+void print_json(const nlohmann::json& j) {
+  std::printf("%s\n", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+}
+
 // An OME-Zarr folder: its metadata as read, and the levels the out-of-core renderer uses.
 int describe_zarr(const std::string& path, bool as_json) {
   auto src = ZarrChunkSource::open(path);
@@ -18,14 +33,8 @@ int describe_zarr(const std::string& path, bool as_json) {
   const std::string format = (img.version().empty() ? std::string("Zarr array") : "OME-Zarr " + img.version()) +
                              " (Zarr v" + std::to_string(img.zarr_format()) + ")";
   if (as_json) {
-    nlohmann::json j;
+    nlohmann::json j = volume_info_json(i);
     j["format"] = format;
-    j["dims"] = {i.dims[0], i.dims[1], i.dims[2]};
-    j["dtype"] = dtype_name(i.dtype);
-    j["channels"] = i.channels;
-    j["timepoints"] = i.timepoints;
-    j["voxel_size"] = {i.voxel_size[0], i.voxel_size[1], i.voxel_size[2]};
-    j["unit"] = i.unit;
     j["levels"] = img.levels().size();
     j["lod_levels"] = (*src)->levels().size();
     nlohmann::json levels = nlohmann::json::array();
@@ -37,7 +46,7 @@ int describe_zarr(const std::string& path, bool as_json) {
                         {"sharded", L.array->meta().sharded}});
     j["level_info"] = levels;
     j["warnings"] = (*src)->warnings();
-    std::printf("%s\n", j.dump(2).c_str());
+    print_json(j);
     return kExitOk;
   }
   std::printf("folder:      %s (%s)\n", path.c_str(), format.c_str());
@@ -78,13 +87,7 @@ void add_info_command(CLI::App& app, Invocation& inv) {
       const uint64_t uniform = r.uniform_chunks();
       const char* codec_names[] = {"raw", "lz4", "shuffle-lz4", "uniform"};
       if (*json) {
-        nlohmann::json j;
-        j["dims"] = {i.dims[0], i.dims[1], i.dims[2]};
-        j["dtype"] = dtype_name(i.dtype);
-        j["channels"] = i.channels;
-        j["timepoints"] = i.timepoints;
-        j["voxel_size"] = {i.voxel_size[0], i.voxel_size[1], i.voxel_size[2]};
-        j["unit"] = i.unit;
+        nlohmann::json j = volume_info_json(i);
         j["levels"] = r.levels().size();
         j["chunks"] = r.chunk_count();
         j["compression_ratio"] = r.compression_ratio();
@@ -100,7 +103,7 @@ void add_info_command(CLI::App& app, Invocation& inv) {
                             {"chunk_counts", {li.chunk_counts[0], li.chunk_counts[1], li.chunk_counts[2]}},
                             {"downsample", {li.downsample[0], li.downsample[1], li.downsample[2]}}});
         j["level_info"] = levels;
-        std::printf("%s\n", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+        print_json(j);
         return kExitOk;
       }
       std::printf("file:        %s (%llu bytes)\n", path->c_str(), (unsigned long long)r.file_bytes());
