@@ -12,6 +12,7 @@
 
 #include "assets/assets.h"
 #include "bench.h"
+#include "volume/dense_chunk_source.h"
 #include "xr/eye_renderer.h"
 #include "xr/view_session.h"
 
@@ -41,10 +42,14 @@ int run(const Options& o) {
   if (!volume) return fail(volume.status());
   auto gpu = open_gpu();
   if (!gpu) return fail(gpu.status());
-  auto eyes = xr::EyeRenderer::create(**gpu, *volume);
+  std::vector<DenseVolume> volumes;
+  volumes.push_back(std::move(volume).value());
+  auto source = DenseChunkSource::create(std::move(volumes));
+  if (!source) return fail(source.status());
+  auto eyes = xr::EyeRenderer::create(**gpu, *source);
   if (!eyes) return fail(eyes.status());
   const xr::VolumeTransform t = xr::default_volume_transform((*eyes)->placement());
-  const RenderSettings settings = xr::default_view_settings();
+  const RenderSettings settings = default_view_settings();
   const xr::Fov fov{-0.785398, 0.698132, 0.785398, -0.785398};  // a typical asymmetric left-eye fov
   const glm::dvec3 c = t.position;
   // Far (the head well inside the centre band), close and close-oblique (it fills the outer bands).

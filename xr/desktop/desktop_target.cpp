@@ -126,7 +126,7 @@ Status DesktopTarget::attach(gpu::Context& ctx) {
     VXR_ASSIGN_OR_RETURN(gpu::Image img,
                          gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R8G8B8A8_UNORM, {o_.width, o_.height, 1},
                                                  VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
-                                                     VK_IMAGE_USAGE_SAMPLED_BIT,
+                                                     VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT,
                                                  "desktop eye"}));
     VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
       image_barrier(cmd, img.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
@@ -245,7 +245,8 @@ Result<TargetImage> DesktopTarget::acquire(size_t view) {
   if (view >= eyes_.size()) return out_of_range("the desktop window has " + std::to_string(eyes_.size()) + " views");
   const gpu::Image& e = eyes_[view];
   // Eye images rest in TRANSFER_SRC_OPTIMAL: end_frame blits from them.
-  return TargetImage{e.image, e.format, {e.extent.width, e.extent.height}, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL};
+  return TargetImage{e.image, e.format, {e.extent.width, e.extent.height}, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                     e.view};
 }
 
 Status DesktopTarget::end_frame(const FrameState& frame, const FrameContent& content) {

@@ -90,10 +90,11 @@ Result<uint32_t> BrickPool::free_slot(UploadStats& stats) {
   return best;
 }
 
-Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uint64_t budget_bytes) {
-  VXR_TRACE_SCOPE("brick_pool.upload");
+Result<UploadStats> BrickPool::stage(
+    const std::vector<ChunkKey>& requests, uint64_t budget_bytes,
+    const std::function<Result<std::shared_ptr<const Chunk>>(const ChunkKey&)>& fetch,
+    std::vector<VkBufferImageCopy>& regions) {
   UploadStats st;
-  std::vector<VkBufferImageCopy> regions;
   uint64_t ring = 0;
   for (const ChunkKey& key : requests) {
     if (resident(key)) continue;
@@ -102,7 +103,11 @@ Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uin
       ++st.deferred;
       continue;
     }
-    VXR_ASSIGN_OR_RETURN(auto chunk, src_.read(key));
+    VXR_ASSIGN_OR_RETURN(auto chunk, fetch(key));
+    if (!chunk) {  // streaming: not decoded yet
+      ++st.deferred;
+      continue;
+    }
     if (chunk->edge != edge_ || chunk->data.size() != brick_bytes_)
       return internal_error("brick pool: chunk level " + std::to_string(key.level) + " has edge " +
                             std::to_string(chunk->edge) + ", expected " + std::to_string(edge_));
@@ -125,17 +130,40 @@ Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uin
     ++st.bricks;
     st.bytes += brick_bytes_;
   }
+  return st;
+}
+
+void BrickPool::record_copies(VkCommandBuffer cmd, const std::vector<VkBufferImageCopy>& regions) {
+  gpu::transition_image(cmd, atlas_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                        VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+                        VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  vkCmdCopyBufferToImage(cmd, staging_.buffer, atlas_.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                         static_cast<uint32_t>(regions.size()), regions.data());
+  gpu::transition_image(cmd, atlas_, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                        VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                        VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+}
+
+Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uint64_t budget_bytes) {
+  VXR_TRACE_SCOPE("brick_pool.upload");
+  std::vector<VkBufferImageCopy> regions;
+  VXR_ASSIGN_OR_RETURN(UploadStats st,
+                       stage(requests, budget_bytes, [this](const ChunkKey& k) { return src_.read(k); }, regions));
   if (regions.empty()) return st;
-  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-    gpu::transition_image(cmd, atlas_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
-                          VK_ACCESS_2_TRANSFER_WRITE_BIT);
-    vkCmdCopyBufferToImage(cmd, staging_.buffer, atlas_.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                           static_cast<uint32_t>(regions.size()), regions.data());
-    gpu::transition_image(cmd, atlas_, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
-                          VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-  }));
+  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_copies(cmd, regions); }));
+  return st;
+}
+
+Result<UploadStats> BrickPool::record_upload(VkCommandBuffer cmd, const std::vector<ChunkKey>& requests,
+                                             uint64_t budget_bytes, const Fetch& fetch) {
+  VXR_TRACE_SCOPE("brick_pool.record_upload");
+  std::vector<VkBufferImageCopy> regions;
+  VXR_ASSIGN_OR_RETURN(UploadStats st, stage(requests, budget_bytes,
+                                             [&](const ChunkKey& k) -> Result<std::shared_ptr<const Chunk>> {
+                                               return fetch(k);
+                                             },
+                                             regions));
+  if (!regions.empty()) record_copies(cmd, regions);
   return st;
 }
 
@@ -146,13 +174,17 @@ Status BrickPool::pin_top_level() {
   for (uint32_t z = 0; z < li.chunk_counts[2]; ++z)
     for (uint32_t y = 0; y < li.chunk_counts[1]; ++y)
       for (uint32_t x = 0; x < li.chunk_counts[0]; ++x) keys.push_back({top, x, y, z, 0, 0});
+  return pin(keys);
+}
+
+Status BrickPool::pin(const std::vector<ChunkKey>& keys) {
   if (keys.size() > capacity() / 2)
-    return out_of_range("brick pool: the top level has " + std::to_string(keys.size()) +
-                        " chunks, too many to pin in " + std::to_string(capacity()) + " slots");
+    return out_of_range("brick pool: " + std::to_string(keys.size()) + " chunks are too many to pin in " +
+                        std::to_string(capacity()) + " slots");
   while (true) {
     VXR_ASSIGN_OR_RETURN(UploadStats st, upload(keys, UINT64_MAX));
     if (st.deferred == 0) break;
-    if (st.bricks == 0) return out_of_range("brick pool: no room to pin the top level");
+    if (st.bricks == 0) return out_of_range("brick pool: no room to pin " + std::to_string(keys.size()) + " chunks");
   }
   for (const ChunkKey& k : keys) slot_[map_.at(k)].pinned = true;
   return Status::ok();

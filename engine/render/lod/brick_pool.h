@@ -12,6 +12,7 @@
 // to TRANSFER_DST_OPTIMAL and back around its copies.
 #pragma once
 
+#include <functional>
 #include <glm/glm.hpp>
 #include <list>
 #include <memory>
@@ -52,9 +53,19 @@ class BrickPool {
 
   // Loads and uploads the top level and pins it (call once, before frames).
   Status pin_top_level();
+  // Loads, uploads and pins `keys` (at most half the slots), before frames.
+  Status pin(const std::vector<ChunkKey>& keys);
   // Uploads requested bricks in order until `budget_bytes` (at least one brick
   // per call) or the ring is used up. Waits for the copies.
   Result<UploadStats> upload(const std::vector<ChunkKey>& requests, uint64_t budget_bytes);
+
+  // Streaming form of upload(): chunks come from `fetch` (nullptr: not loaded
+  // yet, skipped and counted as deferred) and the copies are recorded into
+  // `cmd`, ahead of the frame's rays. The staging ring is reused: the
+  // command buffer of the previous call must have completed.
+  using Fetch = std::function<std::shared_ptr<const Chunk>(const ChunkKey&)>;
+  Result<UploadStats> record_upload(VkCommandBuffer cmd, const std::vector<ChunkKey>& requests, uint64_t budget_bytes,
+                                    const Fetch& fetch);
 
   const gpu::Image& atlas() const { return atlas_; }
   glm::uvec3 atlas_texels() const { return {atlas_.extent.width, atlas_.extent.height, atlas_.extent.depth}; }
@@ -71,6 +82,12 @@ class BrickPool {
   };
   BrickPool(gpu::Context& ctx, const ChunkSource& src) : ctx_(ctx), src_(src) {}
   Result<uint32_t> free_slot(UploadStats& stats);
+  // Copies requested chunks into the staging ring and assigns their slots;
+  // the regions still have to be copied into the atlas (record_copies).
+  Result<UploadStats> stage(const std::vector<ChunkKey>& requests, uint64_t budget_bytes,
+                            const std::function<Result<std::shared_ptr<const Chunk>>(const ChunkKey&)>& fetch,
+                            std::vector<VkBufferImageCopy>& regions);
+  void record_copies(VkCommandBuffer cmd, const std::vector<VkBufferImageCopy>& regions);
   glm::uvec3 slot_origin(uint32_t slot) const;
 
   gpu::Context& ctx_;
