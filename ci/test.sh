@@ -10,6 +10,10 @@ if [[ ! -d ../shared/testdata ]]; then
 fi
 ./ci/install-deps.sh
 ./ci/build.sh
+# Every Debian package the build used must be in ci/packages.txt, or a fresh machine fails.
+if [[ -x ../shared/tools/check-packages.sh ]]; then
+  ../shared/tools/check-packages.sh build/release ci/packages.txt
+fi
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 cd build/release
 ctest --output-on-failure -j"$(nproc)" --timeout 600

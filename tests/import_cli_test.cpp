@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_runner.h"
 #include "volume/importers/import_source.h"
 
 using namespace vxr;
@@ -21,36 +22,13 @@ namespace {
 
 const std::string kData = VXR_TESTDATA_DIR;
 
-struct Run {
-  int rc = -1;
-  std::string out, err;
-};
+using Run = vxr::test::CliRun;
 
-fs::path scratch(const std::string& name) {
-  const fs::path p = fs::path(VXR_TEST_OUT_DIR) / "import_cli" / name;
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
-}
+fs::path scratch(const std::string& name) { return vxr::test::scratch_dir("import_cli", name); }
 
-std::string quote(const std::string& s) { return "'" + s + "'"; }
+std::string quote(const std::string& s) { return vxr::test::shell_quote(s); }
 
-// Runs `vxr <args>`; args are already quoted where needed.
-Run run_vxr(const std::string& args, const fs::path& dir) {
-  const fs::path err = dir / "stderr.txt";
-  const std::string cmd = std::string(VXR_CLI) + " " + args + " 2>" + quote(err.string());
-  Run r;
-  FILE* p = popen(cmd.c_str(), "r");
-  REQUIRE(p);
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int status = pclose(p);
-  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(err);
-  r.err.assign((std::istreambuf_iterator<char>(e)), std::istreambuf_iterator<char>());
-  return r;
-}
+Run run_vxr(const std::string& args, const fs::path& dir) { return vxr::test::run_vxr(args, dir); }
 
 struct Expect {
   const char* input;  // relative to testdata

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "command.h"
+#include "core/output_file.h"
 #include "core/image.h"
 
 namespace vxr::cli {
@@ -24,6 +25,9 @@ void add_compare_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--side-by-side", o->side_by_side, "also write a PNG: a | b | difference (x16, over black)");
   cmd->callback([&inv, o] {
     inv.run = [o] {
+      if (!o->side_by_side.empty()) {
+        if (Status st = check_output(o->side_by_side, {{o->a, o->b}}, "--side-by-side"); !st) return fail(st, kExitUsage);
+      }
       auto a = read_png(o->a);
       if (!a) return fail(a.status());
       auto b = read_png(o->b);

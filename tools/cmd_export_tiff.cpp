@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "command.h"
+#include "core/output_file.h"
 #include "core/progress.h"
 #include "volume/container_reader.h"
 #include "volume/tiff_export.h"
@@ -26,6 +27,7 @@ void add_export_tiff_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--timepoint", a->timepoint, "only this timepoint (default: all)")->check(CLI::NonNegativeNumber);
   cmd->callback([&inv, a] {
     inv.run = [a] {
+      if (Status s = check_output(a->output, {{a->input}}, "-o"); !s) return fail(s, kExitUsage);
       auto reader = ContainerReader::open(a->input);
       if (!reader) return fail(reader.status());
       const ChunkSource& src = **reader;

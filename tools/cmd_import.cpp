@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "command.h"
+#include "core/output_file.h"
 #include "core/progress.h"
 #include "core/trace.h"
 #include "volume/importers/import_source.h"
@@ -44,6 +45,20 @@ std::optional<std::array<double, 3>> parse_voxel_size(const std::string& s) {
   return v;
 }
 
+// A unit goes into the container and every JSON report: printable UTF-8, short.
+bool is_plain_unit(const std::string& u) {
+  if (u.size() > 32) return false;
+  for (size_t i = 0; i < u.size();) {
+    const auto c = static_cast<unsigned char>(u[i]);
+    const int n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xe ? 3 : (c >> 3) == 0x1e ? 4 : 0;
+    if (n == 0 || i + n > u.size() || (n == 1 && (c < 0x20 || c == 0x7f))) return false;
+    for (int k = 1; k < n; ++k)
+      if ((static_cast<unsigned char>(u[i + k]) >> 6) != 0x2) return false;
+    i += n;
+  }
+  return true;
+}
+
 int run_import(const ImportArgs& a) {
   VXR_TRACE_SCOPE("import");
   ImportHints hints;
@@ -53,7 +68,12 @@ int run_import(const ImportArgs& a) {
       return fail(invalid_argument("--voxel-size '" + a.voxel_size + "': give three positive numbers, e.g. 0.5,0.5,2"),
                   kExitUsage);
   }
-  if (!a.unit.empty()) hints.unit = a.unit;
+  if (!a.unit.empty()) {
+    if (!is_plain_unit(a.unit))
+      return fail(invalid_argument("--unit: give a short unit name in UTF-8 letters, e.g. um, nm, mm, micrometer"),
+                  kExitUsage);
+    hints.unit = a.unit;
+  }
   ImportOptions opt;
   opt.chunk_size = a.chunk;
   opt.resume = a.resume;
@@ -73,6 +93,9 @@ int run_import(const ImportArgs& a) {
 
   auto source = open_import_source(a.inputs, hints);
   if (!source) return fail(source.status());
+  std::vector<std::string> inputs = a.inputs;
+  for (const std::string& f : (*source)->files()) inputs.push_back(f);
+  if (Status s = check_output(a.output, inputs, "-o"); !s) return fail(s, kExitUsage);
   for (const std::string& w : (*source)->warnings()) std::fprintf(stderr, "vxr: warning: %s\n", w.c_str());
   auto layout = import_layout((*source)->info(), opt);
   if (!layout) return fail(layout.status(), kExitUsage);
@@ -98,7 +121,7 @@ int run_import(const ImportArgs& a) {
 
 void add_import_command(CLI::App& app, Invocation& inv) {
   auto args = std::make_shared<ImportArgs>();
-  auto* cmd = app.add_subcommand("import", "convert image files (raw+JSON, TIFF, ...) into a .vxc container with its "
+  auto* cmd = app.add_subcommand("import", "convert image files (raw+JSON, TIFF, OME-Zarr, ...) into a .vxc container with its "
                                            "resolution pyramid");
   cmd->add_option("inputs", args->inputs, "input file(s), folder or glob")->required();
   cmd->add_option("-o,--output", args->output, "output .vxc file")->required();

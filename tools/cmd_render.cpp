@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "command.h"
+#include "core/output_file.h"
 #include "core/trace.h"
 #include "render/camera.h"
 #include "render/lod/brick_renderer.h"
@@ -25,6 +26,7 @@
 #include "scene/render_settings.h"
 #include "volume/container_reader.h"
 #include "volume/load_dense.h"
+#include "volume/open_chunk_source.h"
 #include "volume/procedural_source.h"
 
 namespace vxr::cli {
@@ -32,7 +34,7 @@ namespace {
 
 struct Options {
   std::string input, output, settings_path, camera, size = "512x512", model, colormap, window, path = "compute";
-  std::string renderer;  // "" = lod for .vxc and procedural: inputs, dense otherwise
+  std::string renderer;  // "" = lod for chunk sources (.vxc, OME-Zarr) and procedural: inputs, dense otherwise
   double fov = 0.0, step = 0.0, reference_step = 1.0 / 16.0;
   double lod_bias = 0.0, frame_budget_ms = 0.0;
   bool lod_bias_given = false;
@@ -81,7 +83,7 @@ Result<std::string> read_text(const std::string& path) {
 
 using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 
-// The out-of-core path: a .vxc container or a procedural source through the
+// The out-of-core path: a .vxc container, an OME-Zarr folder or a procedural source through the
 // brick renderer. Without --frame-budget-ms it renders until nothing is
 // missing (every wanted brick resident) and writes that frame; with it, it
 // renders --frames frames (default 30) letting the frame-budget controller set
@@ -99,9 +101,10 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
       window_given = true;
     }
   } else {
-    auto r = ContainerReader::open(o.input);
+    auto r = open_chunk_source(o.input);
     if (!r) return fail(r.status());
-    src = std::move(r).value();
+    for (const std::string& w : r->warnings) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), w.c_str());
+    src = std::move(r->source);
   }
   const VolumeInfo& info = src->info();
   if (info.dtype != DType::kU8 && info.dtype != DType::kU16)
@@ -189,13 +192,22 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
 
 int run(const Options& o) {
   VXR_TRACE_SCOPE("render");
+  if (!starts_with(o.input, "procedural:")) {
+    if (Status st = check_input(o.input, /*allow_dir=*/true); !st) return fail(st);
+  }
+  if (Status st = check_output(o.output, {{o.input, o.settings_path}}, "-o"); !st) return fail(st, kExitUsage);
+  if (!o.settings_path.empty()) {
+    if (Status st = check_input(o.settings_path); !st) return fail(st, kExitUsage);
+  }
   // Settings first: a bad setting is a usage error even before any file is read.
   Scene scene;
   bool window_given = false;
   if (!o.settings_path.empty()) {
     auto text = read_text(o.settings_path);
     if (!text) return fail(text.status(), kExitUsage);
-    const bool is_scene = text->find("\"render\"") != std::string::npos;
+    // A Scene has a render, camera or volume section; plain RenderSettings have none.
+    const bool is_scene = text->find("\"render\"") != std::string::npos || text->find("\"camera\"") != std::string::npos ||
+                          text->find("\"volume\"") != std::string::npos;
     if (is_scene) {
       auto sc = scene_from_json(*text);
       if (!sc) return fail(invalid_argument(o.settings_path + ": " + sc.status().message()), kExitUsage);
@@ -237,14 +249,14 @@ int run(const Options& o) {
   // Which renderer: the out-of-core brick renderer for containers and
   // procedural sources (the product's path for them), the dense one otherwise.
   const bool procedural = starts_with(o.input, "procedural:");
-  const bool container = std::filesystem::path(o.input).extension() == ".vxc";
+  const bool container = is_chunk_source_input(o.input);  // .vxc or OME-Zarr, read in place
   if (!o.renderer.empty() && o.renderer != "lod" && o.renderer != "dense")
     return fail(invalid_argument("--renderer: use lod or dense, not '" + o.renderer + "'"), kExitUsage);
   std::string renderer = o.renderer;
   if (renderer.empty()) renderer = (procedural || container) && !o.reference ? "lod" : "dense";
   if (renderer == "lod" && !procedural && !container)
-    return fail(invalid_argument("--renderer lod: '" + o.input + "' is not a .vxc container; convert it with "
-                                 "`vxr import` first, or use --renderer dense"),
+    return fail(invalid_argument("--renderer lod: '" + o.input + "' is not a .vxc container or OME-Zarr folder; "
+                                 "convert it with `vxr import` first, or use --renderer dense"),
                 kExitUsage);
   if (renderer == "dense" && procedural)
     return fail(invalid_argument("--renderer dense: a procedural source is drawn only by --renderer lod"), kExitUsage);
@@ -256,7 +268,10 @@ int run(const Options& o) {
                 kExitUsage);
   if (o.frame_budget_ms < 0.0 || !std::isfinite(o.frame_budget_ms))
     return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
-  if (o.frames < 0) return fail(invalid_argument("--frames: must be >= 1"), kExitUsage);
+  if (o.frames < 0 || o.frames > 100000) return fail(invalid_argument("--frames: must be 1..100000"), kExitUsage);
+  // The reference marches every sample in double on the CPU: below 1/256 voxel it would run for days.
+  if (o.reference && !(o.reference_step >= 1.0 / 256 && o.reference_step <= 64.0))
+    return fail(invalid_argument("--reference-step: must be within 1/256..64 voxels (default 1/16)"), kExitUsage);
   if (!std::isfinite(o.lod_bias) || std::abs(o.lod_bias) > 16.0)
     return fail(invalid_argument("--lod-bias: must be within -16..16 (log2 of voxels per pixel)"), kExitUsage);
 
@@ -359,7 +374,7 @@ int run(const Options& o) {
 
 void add_render_command(CLI::App& app, Invocation& inv) {
   auto o = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand("render", "render one picture of a volume (.vxc, TIFF, OME-TIFF, slices, .ims, raw+JSON, procedural:vessels:SIDE) to PNG");
+  auto* cmd = app.add_subcommand("render", "render one picture of a volume (.vxc, OME-Zarr, TIFF, OME-TIFF, slices, .ims, raw+JSON, procedural:vessels:SIDE) to PNG");
   cmd->add_option("input", o->input, "the volume")->required();
   cmd->add_option("-o,--out", o->output, "output PNG")->required();
   cmd->add_option("--settings", o->settings_path, "render settings JSON (RenderSettings, or a Scene with render+camera)");
@@ -372,7 +387,7 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--step", o->step, "sample step in voxels");
   cmd->add_option("--path", o->path, "compute (default) or fragment");
   cmd->add_option("--renderer", o->renderer,
-                  "lod (out-of-core bricks; default for .vxc and procedural:vessels:SIDE) or dense (whole volume)");
+                  "lod (out-of-core bricks; default for .vxc, OME-Zarr and procedural:vessels:SIDE) or dense (whole volume)");
   cmd->add_option("--lod-bias", o->lod_bias, "lod: log2 of voxels per pixel accepted (+1 coarser, -1 finer; default 0)");
   cmd->add_option("--frame-budget-ms", o->frame_budget_ms,
                   "lod: render --frames frames, adjusting the LOD bias to hold this frame time");

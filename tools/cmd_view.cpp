@@ -7,10 +7,10 @@
 // desktop window when a display is there, else headless. --xr / --desktop /
 // --headless force one; --frames N renders N frames and exits cleanly.
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "command.h"
+#include "core/output_file.h"
 #include "render/volume_session.h"
 #include "xr/headless/headless_target.h"
 #include "xr/target_factory.h"
@@ -39,6 +39,10 @@ struct Options {
 
 int run(const Options& o) {
   if (o.frame_budget_ms < 0.0) return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
+  if (!o.json.empty()) {
+    const std::string inputs[] = {o.input};
+    if (Status st = check_output(o.json, inputs, "--json"); !st) return fail(st, kExitUsage);
+  }
   auto session = open_volume_session(o.sample ? "" : o.input, o.flags);
   if (!session) {
     const ErrorCode c = session.status().code();  // a wrong path or argument is a usage error
@@ -86,8 +90,7 @@ int run(const Options& o) {
   if (!o.json.empty()) {
     nlohmann::json j = xr::view_stats_json(*stats, vo);
     j["input"] = session->description;
-    std::ofstream f(o.json);
-    if (!(f << j.dump(2) << "\n")) return fail(io_error(o.json + ": cannot write the JSON report"));
+    if (Status st = write_file_atomically(o.json, j.dump(2) + "\n"); !st) return fail(st);
   }
   std::printf("vxr view: %llu frames rendered on %s, %.2f ms mean, %.2f ms max per frame, %d restart(s)\n",
               static_cast<unsigned long long>(stats->frames_rendered), stats->target.c_str(), stats->mean_frame_ms,
@@ -112,7 +115,8 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   auto* fh = cmd->add_flag("--headless", o->force_headless, "render without a display");
   fx->excludes(fd, fh);
   fd->excludes(fh);
-  cmd->add_option("--frames", o->frames, "render N frames, then exit cleanly (0: until closed)");
+  cmd->add_option("--frames", o->frames, "render N frames, then exit cleanly (0: until closed)")
+      ->check(CLI::Range(uint64_t(0), uint64_t(10000000)));
   cmd->add_option("--script", o->script, "headless: pose script (JSON; see xr/script.h)");
   cmd->add_option("--png-dir", o->png_dir, "headless: write the eye images of the last frame here");
   cmd->add_flag("--png-every-frame", o->png_every_frame, "headless: write every frame's eye images");

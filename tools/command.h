@@ -31,6 +31,8 @@ void add_import_command(CLI::App& app, Invocation& inv);
 void add_info_command(CLI::App& app, Invocation& inv);
 void add_verify_command(CLI::App& app, Invocation& inv);
 void add_export_tiff_command(CLI::App& app, Invocation& inv);
+void add_annotate_command(CLI::App& app, Invocation& inv);
+void add_cards_command(CLI::App& app, Invocation& inv);
 
 // Opens the Vulkan device (VXR_DEVICE, VXR_VALIDATION from the environment).
 Result<std::unique_ptr<gpu::Context>> open_gpu();

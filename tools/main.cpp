@@ -1,5 +1,7 @@
 // `vxr`: the command line. Each subcommand lives in its own cmd_*.cpp.
 #include <cstdio>
+#include <exception>
+#include <new>
 
 #include "command.h"
 #include "core/trace.h"
@@ -24,7 +26,7 @@ bool has_subcommand(const CLI::App& app, const std::string& name) {
 }
 }  // namespace
 
-int main(int argc, char** argv) {
+int run_vxr(int argc, char** argv) {
   using namespace vxr::cli;
   CLI::App app{"vxr: explore very large multidimensional images in OpenXR, a desktop window, or headless"};
   app.name("vxr");
@@ -45,6 +47,8 @@ int main(int argc, char** argv) {
   add_info_command(app, inv);
   add_verify_command(app, inv);
   add_export_tiff_command(app, inv);
+  add_annotate_command(app, inv);
+  add_cards_command(app, inv);
 
   // CLI11 reports a stray word as "a subcommand is required"; name it instead.
   if (argc > 1 && argv[1][0] != '-' && !has_subcommand(app, argv[1])) {
@@ -87,4 +91,19 @@ int main(int argc, char** argv) {
     if (code == kExitOk) code = 3;
   }
   return code;
+}
+
+// Last line of defence: a third-party exception (nlohmann::json, std::filesystem,
+// an allocation) must end in one line and exit 1, never in abort() and a core.
+int main(int argc, char** argv) {
+  try {
+    return run_vxr(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "vxr: out of memory; lower --memory or the output size, or free memory\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "vxr: internal error: %s (please report this with the command line)\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "vxr: internal error: unknown exception (please report this with the command line)\n");
+  }
+  return vxr::cli::kExitFailure;
 }

@@ -1,5 +1,7 @@
 #include "core/image.h"
 
+#include "core/output_file.h"
+
 #include <png.h>
 
 #include <cstdio>
@@ -19,10 +21,10 @@ using File = std::unique_ptr<FILE, FileCloser>;
 
 Status write_png(const std::string& path, const ImageRgba8& image) {
   if (image.width == 0 || image.height == 0) return invalid_argument(path + ": refusing to write an empty image");
-  const std::string tmp = path + ".partial";
+  VXR_ASSIGN_OR_RETURN(TempFile tmp, TempFile::create_beside(path));
   volatile bool ok = false;  // volatile: survives png's longjmp
   {
-    File f(std::fopen(tmp.c_str(), "wb"));
+    File f(::fdopen(tmp.release_fd(), "wb"));
     if (!f) return io_error(path + ": cannot open for writing");
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
     png_infop info = png ? png_create_info_struct(png) : nullptr;
@@ -38,14 +40,12 @@ Status write_png(const std::string& path, const ImageRgba8& image) {
     }
     png_destroy_write_struct(&png, &info);
   }
-  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    return io_error(path + ": PNG write failed");
-  }
-  return Status::ok();
+  if (!ok) return io_error(path + ": PNG write failed (disk full?)");
+  return tmp.commit();  // the temp file is removed if this fails
 }
 
 Result<ImageRgba8> read_png(const std::string& path) {
+  VXR_RETURN_IF_ERROR(check_input(path));  // a FIFO would block fopen forever
   File f(std::fopen(path.c_str(), "rb"));
   if (!f) return not_found(path + ": cannot open");
   unsigned char sig[8];

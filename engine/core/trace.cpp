@@ -1,5 +1,7 @@
 #include "core/trace.h"
 
+#include "core/output_file.h"
+
 #include <atomic>
 #include <fstream>
 #include <mutex>
@@ -69,15 +71,7 @@ Status write(const std::string& path) {
     }
   }
   os << "\n],\"displayTimeUnit\":\"ms\"}\n";
-  const std::string tmp = path + ".partial";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) return io_error(path + ": cannot open for writing");
-    f << os.str();
-    if (!f.flush()) return io_error(path + ": write failed");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) return io_error(path + ": cannot rename from " + tmp);
-  return Status::ok();
+  return write_file_atomically(path, os.str());
 }
 
 }  // namespace vxr::trace

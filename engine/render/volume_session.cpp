@@ -9,13 +9,10 @@
 #include "volume/container_reader.h"
 #include "volume/dense_chunk_source.h"
 #include "volume/load_dense.h"
+#include "volume/open_chunk_source.h"
 
 namespace vxr {
 namespace {
-
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 // Values at the 0.5 and 99.5 percentiles of a volume (sampled), in data units.
 std::pair<double, double> percentile_window(const DenseVolume& v) {
@@ -120,10 +117,11 @@ Result<VolumeSession> open_volume_session(const std::string& input, const Sessio
     out.settings.channels[0].window_lo = 8;  // above the background noise (0..6), as `vxr render`
     out.settings.channels[0].window_hi = 200;
     window_known = true;
-  } else if (ends_with(input, ".vxc")) {
-    VXR_ASSIGN_OR_RETURN(std::unique_ptr<ContainerReader> r, ContainerReader::open(input));
-    out.source = std::move(r);
-    out.description = input;
+  } else if (is_chunk_source_input(input)) {  // .vxc, OME-Zarr: read in place
+    VXR_ASSIGN_OR_RETURN(OpenedChunkSource opened, open_chunk_source(input));
+    out.source = std::move(opened.source);
+    out.notes = std::move(opened.warnings);
+    out.description = input + " (" + opened.format + ")";
   } else {
     VXR_ASSIGN_OR_RETURN(LoadedVolume loaded, load_for_render(input, 1u << 20, flags.max_dense_bytes));
     out.notes = loaded.notes;

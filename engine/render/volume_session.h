@@ -6,7 +6,7 @@
 //   input                              source
 //   ""                                 the bundled sample (MRI head), in memory
 //   procedural:vessels:SIDE[:SEED]     synthetic vessels, generated per chunk
-//   *.vxc                              the container, read chunk by chunk
+//   *.vxc, OME-Zarr                    read in place, chunk by chunk (open_chunk_source)
 //   anything vxr imports               read whole (averaged down to fit the
 //                                      memory limit), pyramid built in memory
 #pragma once

@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+
 namespace vxr {
 namespace {
 
@@ -196,6 +198,18 @@ Result<Scene> scene_from_json(const std::string& text) {
       get(c, "target", s.camera.target);
       get(c, "up", s.camera.up);
       get(c, "fov_y_deg", s.camera.fov_y_deg);
+      // A degenerate camera draws a black picture and says nothing: refuse it here.
+      if (!(s.camera.fov_y_deg > 0.0 && s.camera.fov_y_deg < 179.0))
+        throw KeyError{"camera.fov_y_deg must be in (0, 179) degrees"};
+      for (double v : {s.camera.eye[0], s.camera.eye[1], s.camera.eye[2], s.camera.target[0], s.camera.target[1],
+                       s.camera.target[2], s.camera.up[0], s.camera.up[1], s.camera.up[2]})
+        if (!std::isfinite(v)) throw KeyError{"camera: eye, target and up must be finite numbers"};
+      const double d[3] = {s.camera.target[0] - s.camera.eye[0], s.camera.target[1] - s.camera.eye[1],
+                           s.camera.target[2] - s.camera.eye[2]};
+      const double* u = s.camera.up.data();
+      const double cross[3] = {d[1] * u[2] - d[2] * u[1], d[2] * u[0] - d[0] * u[2], d[0] * u[1] - d[1] * u[0]};
+      if (cross[0] == 0.0 && cross[1] == 0.0 && cross[2] == 0.0)
+        throw KeyError{"camera: eye and target coincide, or up is parallel to the view direction"};
     }
     if (j.contains("render")) from_j(j.at("render"), s.render);
   });

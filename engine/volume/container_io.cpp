@@ -30,23 +30,34 @@ ContainerFile& ContainerFile::operator=(ContainerFile&& o) noexcept {
 
 Result<ContainerFile> ContainerFile::open_read(const std::string& path) {
   ContainerFile f;
-  f.fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: opening a FIFO must not wait for a writer; it is refused below.
+  f.fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (f.fd_ < 0) {
     const int e = errno;
     if (e == ENOENT) return not_found(path + ": no such file");
     return io_error(path + ": cannot open (" + std::strerror(e) + ")");
   }
   f.path_ = path;
+  struct stat st{};
+  if (::fstat(f.fd_, &st) != 0 || !S_ISREG(st.st_mode))
+    return invalid_argument(path + ": is not a regular file (a folder, FIFO or device); give a .vxc file");
+  (void)::fcntl(f.fd_, F_SETFL, 0);
   return f;
 }
 
-Result<ContainerFile> ContainerFile::open_write(const std::string& path, bool truncate) {
+Result<ContainerFile> ContainerFile::open_write(const std::string& path, bool create_new) {
   ContainerFile f;
-  f.fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | (truncate ? O_TRUNC : 0), 0644);
-  if (f.fd_ < 0)
-    return io_error(path + ": cannot create (" + std::string(std::strerror(errno)) +
+  // O_NOFOLLOW | O_EXCL: a symlink or file planted under the temp name is never written through.
+  f.fd_ = ::open(path.c_str(), O_RDWR | O_CLOEXEC | O_NOFOLLOW | (create_new ? O_CREAT | O_EXCL : 0), 0644);
+  if (f.fd_ < 0) {
+    if (errno == ELOOP) return invalid_argument(path + ": is a symbolic link; refusing to write through it");
+    return io_error(path + ": cannot " + (create_new ? "create" : "open") + " (" + std::string(std::strerror(errno)) +
                     "); check that the folder exists and is writable");
+  }
   f.path_ = path;
+  struct stat st{};
+  if (::fstat(f.fd_, &st) != 0 || !S_ISREG(st.st_mode))
+    return invalid_argument(path + ": is not a regular file; refusing to write to it");
   return f;
 }
 

@@ -25,8 +25,9 @@ class ContainerFile {
   ContainerFile& operator=(const ContainerFile&) = delete;
 
   static Result<ContainerFile> open_read(const std::string& path);
-  // Opens for read+write, creating it; `truncate` empties it.
-  static Result<ContainerFile> open_write(const std::string& path, bool truncate);
+  // Opens for read+write. create_new: the file must not exist yet (O_EXCL);
+  // otherwise it must be an existing regular file. Never follows a symlink.
+  static Result<ContainerFile> open_write(const std::string& path, bool create_new);
 
   Status read_at(void* dst, uint64_t bytes, uint64_t offset) const;
   Status write_at(const void* src, uint64_t bytes, uint64_t offset);

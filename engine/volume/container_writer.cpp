@@ -50,7 +50,7 @@ Result<std::unique_ptr<ContainerWriter>> ContainerWriter::create(const std::stri
   std::memcpy(&w->header_checksum_, header.data() + header.size() - 8, 8);
 
   std::error_code ec;
-  const bool exists = std::filesystem::exists(w->partial_, ec);
+  const bool exists = std::filesystem::exists(std::filesystem::symlink_status(w->partial_, ec));
   if (exists && !resume)
     return invalid_argument(w->partial_ + ": an interrupted import exists; continue it with --resume, or delete it");
   bool fresh = true;
@@ -96,6 +96,10 @@ Result<std::unique_ptr<ContainerWriter>> ContainerWriter::create(const std::stri
     // A partial file no longer than a torn header holds nothing worth keeping: start over.
   }
   if (fresh) {
+    if (exists) {  // a torn header only: start over in a new file
+      w->file_ = ContainerFile();
+      std::filesystem::remove(w->partial_, ec);
+    }
     VXR_ASSIGN_OR_RETURN(w->file_, ContainerFile::open_write(w->partial_, true));
     VXR_RETURN_IF_ERROR(w->write_tracked(header.data(), header.size(), 0));
     w->end_ = header.size();

@@ -7,6 +7,7 @@
 
 #include "volume/container_reader.h"
 #include "volume/importers/import_source.h"
+#include "volume/open_chunk_source.h"
 
 namespace vxr {
 namespace {
@@ -58,20 +59,22 @@ DenseVolume shrink_by_two(const DenseVolume& v) {
   return out;
 }
 
-// A .vxc: the finest pyramid level that fits, read chunk by chunk (no shrinking in memory).
-static Result<LoadedVolume> load_container_level(const std::string& path, uint32_t max_dim, uint64_t max_bytes) {
-  VXR_ASSIGN_OR_RETURN(std::unique_ptr<ContainerReader> reader, ContainerReader::open(path));
-  const VolumeInfo& info = reader->info();
+// A .vxc or OME-Zarr: the finest pyramid level that fits, read chunk by chunk (no shrinking in memory).
+static Result<LoadedVolume> load_chunk_source_level(const std::string& path, uint32_t max_dim, uint64_t max_bytes) {
+  VXR_ASSIGN_OR_RETURN(OpenedChunkSource opened, open_chunk_source(path));
+  const ChunkSource& source = *opened.source;
+  const VolumeInfo& info = source.info();
   LoadedVolume out;
-  out.format = "vxc container";
-  const uint32_t level = finest_level_that_fits(*reader, max_dim, max_bytes);
-  const auto& lv = reader->levels()[level];
+  out.format = opened.format;
+  out.notes = opened.warnings;
+  const uint32_t level = finest_level_that_fits(source, max_dim, max_bytes);
+  const auto& lv = source.levels()[level];
   out.shrink = std::max({lv.downsample[0], lv.downsample[1], lv.downsample[2]});
   const uint32_t channels = std::min<uint32_t>(info.channels, 4);
   if (info.channels > 4) out.notes.push_back("showing the first 4 of " + std::to_string(info.channels) + " channels");
   if (info.timepoints > 1) out.notes.push_back("showing timepoint 0 of " + std::to_string(info.timepoints));
   for (uint32_t c = 0; c < channels; ++c) {
-    VXR_ASSIGN_OR_RETURN(DenseVolume v, read_level_dense(*reader, level, c, 0, max_bytes));
+    VXR_ASSIGN_OR_RETURN(DenseVolume v, read_level_dense(source, level, c, 0, max_bytes));
     out.channels.push_back(std::move(v));
   }
   if (level > 0) out.notes.push_back("drawing pyramid level " + std::to_string(level) + " to fit the GPU's limits");
@@ -79,7 +82,7 @@ static Result<LoadedVolume> load_container_level(const std::string& path, uint32
 }
 
 Result<LoadedVolume> load_for_render(const std::string& path, uint32_t max_dim, uint64_t max_bytes) {
-  if (std::filesystem::path(path).extension() == ".vxc") return load_container_level(path, max_dim, max_bytes);
+  if (is_chunk_source_input(path)) return load_chunk_source_level(path, max_dim, max_bytes);
   VXR_ASSIGN_OR_RETURN(std::unique_ptr<SlabSource> src, open_import_source({path}));
   const VolumeInfo& info = src->info();
   LoadedVolume out;

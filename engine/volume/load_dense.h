@@ -1,6 +1,8 @@
 // Loading what `vxr render` draws: any importable input (raw+JSON sidecar,
 // TIFF, OME-TIFF, slice folders, Imaris, ...) as whole channels in memory,
-// shrunk by 2x box averaging until each fits the GPU's 3D texture limits.
+// shrunk by 2x box averaging until each fits the GPU's 3D texture limits;
+// chunk sources (.vxc, OME-Zarr; see open_chunk_source.h) give their finest
+// pyramid level that fits instead.
 #pragma once
 
 #include <string>

@@ -31,6 +31,9 @@ class SlabSource {
   // imported the first series (128x72), 1 page skipped").
   virtual std::vector<std::string> warnings() const { return {}; }
 
+  // Every file the source reads (outputs must not be one of them).
+  virtual std::vector<std::string> files() const { return {}; }
+
   // A short description of the source for messages ("ImageJ TIFF stack", ...).
   virtual std::string format_name() const = 0;
 };

@@ -52,7 +52,6 @@ Result<std::unique_ptr<TiffStackWriter>> TiffStackWriter::create(const std::stri
                             std::to_string(info.dims[1]) + " voxels");
   std::unique_ptr<TiffStackWriter> w(new TiffStackWriter());
   w->path_ = path;
-  w->partial_ = path + ".partial";
   w->info_ = info;
   w->big_ = force_bigtiff || needs_big_tiff(info);  // compressed data is never larger than this assumes
   w->compression_ = compression;
@@ -61,12 +60,14 @@ Result<std::unique_ptr<TiffStackWriter>> TiffStackWriter::create(const std::stri
   const std::filesystem::path parent = std::filesystem::absolute(path, ec).parent_path();
   if (!std::filesystem::is_directory(parent, ec))
     return not_found(path + ": folder " + parent.string() + " does not exist");
+  VXR_ASSIGN_OR_RETURN(w->partial_, TempFile::create_beside(path));
   TIFFOpenOptions* opts = TIFFOpenOptionsAlloc();
   TIFFOpenOptionsSetErrorHandlerExtR(opts, on_error, w->sink_.get());
   TIFFOpenOptionsSetWarningHandlerExtR(opts, on_warning, w->sink_.get());
-  w->tif_ = TIFFOpenExt(w->partial_.c_str(), w->big_ ? "w8" : "w", opts);
+  // libtiff owns (and closes) the descriptor from here on.
+  w->tif_ = TIFFFdOpenExt(w->partial_.release_fd(), w->partial_.path().c_str(), w->big_ ? "w8" : "w", opts);
   TIFFOpenOptionsFree(opts);
-  if (!w->tif_) return io_error(path + ": cannot create " + w->partial_ + " (" + w->sink_->first_error + ")");
+  if (!w->tif_) return io_error(path + ": cannot create " + w->partial_.path() + " (" + w->sink_->first_error + ")");
 
   // ImageJ hyperstack description (ij/io/FileSaver.getDescriptionString).
   const uint64_t images = info.dims[2] * info.channels * info.timepoints;
@@ -84,12 +85,9 @@ Result<std::unique_ptr<TiffStackWriter>> TiffStackWriter::create(const std::stri
   return w;
 }
 
+// partial_ (a TempFile) removes the unfinished file after libtiff closed it.
 TiffStackWriter::~TiffStackWriter() {
   if (tif_) TIFFClose(tif_);
-  if (!finished_ && !partial_.empty()) {
-    std::error_code ec;
-    std::filesystem::remove(partial_, ec);
-  }
 }
 
 Status TiffStackWriter::write_page(const uint8_t* voxels) {
@@ -148,16 +146,7 @@ Status TiffStackWriter::finish() {
   TIFFClose(tif_);
   tif_ = nullptr;
   if (!sink_->first_error.empty()) return io_error(path_ + ": " + sink_->first_error);
-  // Data on disk before the name points at it.
-  const int fd = ::open(partial_.c_str(), O_RDONLY);
-  if (fd < 0 || ::fsync(fd) != 0) {
-    if (fd >= 0) ::close(fd);
-    return io_error(path_ + ": cannot sync " + partial_);
-  }
-  ::close(fd);
-  std::error_code ec;
-  std::filesystem::rename(partial_, path_, ec);
-  if (ec) return io_error(path_ + ": cannot rename " + partial_ + " into place (" + ec.message() + ")");
+  VXR_RETURN_IF_ERROR(partial_.commit());
   finished_ = true;
   return Status::ok();
 }

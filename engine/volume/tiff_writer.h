@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/output_file.h"
 #include "core/status.h"
 #include "volume/volume_info.h"
 
@@ -51,7 +52,8 @@ class TiffStackWriter {
 
  private:
   TiffStackWriter() = default;
-  std::string path_, partial_;
+  std::string path_;
+  TempFile partial_;  // the file being written; renamed over path_ by finish()
   VolumeInfo info_;
   TIFF* tif_ = nullptr;
   std::unique_ptr<Sink> sink_;

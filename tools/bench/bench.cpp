@@ -1,5 +1,7 @@
 #include "bench.h"
 
+#include "core/output_file.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -51,15 +53,7 @@ Result<std::string> write_report(const BenchOptions& o, const std::string& name,
   std::error_code ec;
   std::filesystem::create_directories(o.out_dir, ec);
   const std::string path = (std::filesystem::path(o.out_dir) / (name + ".json")).string();
-  const std::string tmp = path + ".partial";
-  {
-    std::ofstream f(tmp, std::ios::trunc);
-    if (!f) return io_error(path + ": cannot open for writing (is the --out folder writable?)");
-    f << doc.dump(2) << "\n";
-    if (!f.flush()) return io_error(path + ": write failed");
-  }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) return io_error(path + ": " + ec.message());
+  if (Status w = write_file_atomically(path, doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n"); !w) return w;
   if (o.json) std::printf("%s\n", doc.dump(2).c_str());
   std::printf("%s\n", path.c_str());
   return path;

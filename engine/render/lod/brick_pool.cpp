@@ -1,11 +1,29 @@
 #include "render/lod/brick_pool.h"
 
+#include <algorithm>
 #include <cstring>
 #include <string>
 
 #include "core/trace.h"
 
 namespace vxr {
+
+Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_bytes, uint32_t max_dim,
+                             uint64_t max_bytes) {
+  const uint64_t brick_bytes = uint64_t(edge) * edge * edge * texel_bytes;
+  if (edge > max_dim || brick_bytes > max_bytes)
+    return out_of_range("brick pool: one brick of " + std::to_string(edge) + "^3 texels does not fit the device (" +
+                        std::to_string(max_dim) + " texels a side, " + std::to_string(max_bytes >> 20) +
+                        " MiB); import with a smaller --chunk");
+  glm::uvec3 s;
+  for (int a = 0; a < 3; ++a) s[a] = std::max(1u, std::min(wanted[a], max_dim / edge));
+  // Shrink the longest axis until the atlas fits the heap; at least one slot always fits (checked above).
+  while (uint64_t(s.x) * s.y * s.z * brick_bytes > max_bytes) {
+    const int a = s.x >= s.y && s.x >= s.z ? 0 : (s.y >= s.z ? 1 : 2);
+    --s[a];
+  }
+  return s;
+}
 
 Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const ChunkSource& source,
                                                      const BrickPoolOptions& options) {
@@ -19,28 +37,19 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   }
   if (options.slots.x == 0 || options.slots.y == 0 || options.slots.z == 0)
     return invalid_argument("brick pool: every axis needs at least one slot");
-  p->slots_ = options.slots;
   p->edge_ = source.chunk_size() + 2 * source.apron();
   p->brick_bytes_ = uint64_t(p->edge_) * p->edge_ * p->edge_ * p->texel_bytes_;
-  const uint64_t ext[3] = {uint64_t(options.slots.x) * p->edge_, uint64_t(options.slots.y) * p->edge_,
-                           uint64_t(options.slots.z) * p->edge_};
-  const uint32_t max3d = ctx.limits().maxImageDimension3D;
-  for (uint64_t e : ext)
-    if (e > max3d)
-      return out_of_range("brick pool: an atlas side of " + std::to_string(e) + " texels exceeds the device's " +
-                          std::to_string(max3d) + "; use fewer slots per axis");
-  const uint64_t atlas_bytes = ext[0] * ext[1] * ext[2] * p->texel_bytes_;
-  if (atlas_bytes > (1ull << 31) - (64ull << 20))
-    return out_of_range("brick pool: the atlas needs " + std::to_string(atlas_bytes >> 20) +
-                        " MiB, more than a 2 GiB heap leaves; use fewer slots");
-  if (options.staging_bytes < p->brick_bytes_)
-    return invalid_argument("brick pool: the staging ring must hold at least one brick (" +
-                            std::to_string(p->brick_bytes_) + " bytes)");
+  VXR_ASSIGN_OR_RETURN(p->slots_, fit_slots(options.slots, p->edge_, p->texel_bytes_, ctx.limits().maxImageDimension3D,
+                                            kMaxAtlasBytes));
+  const uint64_t ext[3] = {uint64_t(p->slots_.x) * p->edge_, uint64_t(p->slots_.y) * p->edge_,
+                           uint64_t(p->slots_.z) * p->edge_};
+  // The ring must hold at least one brick, however wide the container's chunks are.
+  const uint64_t staging_bytes = std::max(options.staging_bytes, p->brick_bytes_);
   VXR_ASSIGN_OR_RETURN(p->atlas_, gpu::create_image(ctx, {VK_IMAGE_TYPE_3D, format,
                                                           {uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])},
                                                           VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                                                           "brick atlas"}));
-  VXR_ASSIGN_OR_RETURN(p->staging_, gpu::create_buffer(ctx, {options.staging_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+  VXR_ASSIGN_OR_RETURN(p->staging_, gpu::create_buffer(ctx, {staging_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                                              gpu::MemoryIntent::kUpload, "brick staging ring"}));
   // Clear once so never-written texels are defined (validation and determinism).
   VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {

@@ -27,11 +27,20 @@
 namespace vxr {
 
 struct BrickPoolOptions {
-  // Slots per atlas axis; the atlas is slots * (chunk_size + 2 * apron) texels
-  // per axis, checked against maxImageDimension3D and the memory heap.
+  // Slots per atlas axis wanted; the atlas is slots * (chunk_size + 2 * apron)
+  // texels per axis. create() lowers them to fit maxImageDimension3D and the
+  // heap (fit_slots), so containers with wide chunks still draw.
   glm::uvec3 slots{16, 16, 8};
-  uint64_t staging_bytes = 16ull << 20;  // the upload ring; bounds one frame's uploads
+  uint64_t staging_bytes = 16ull << 20;  // the upload ring; bounds one frame's uploads (grown to one brick)
 };
+
+// Largest atlas create() makes: lavapipe has one 2 GiB heap; leave room for the rest.
+constexpr uint64_t kMaxAtlasBytes = (1ull << 31) - (64ull << 20);
+
+// `wanted` slots per axis lowered until every side fits max_dim texels and the
+// atlas fits max_bytes. kOutOfRange when not even one brick fits.
+Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_bytes, uint32_t max_dim,
+                             uint64_t max_bytes);
 
 struct UploadStats {
   uint32_t bricks = 0;

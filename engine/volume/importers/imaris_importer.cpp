@@ -115,6 +115,7 @@ class ImarisSource final : public SlabSource {
   const VolumeInfo& info() const override { return info_; }
   std::vector<std::string> warnings() const override { return warnings_; }
   std::string format_name() const override { return "Imaris (.ims)"; }
+  std::vector<std::string> files() const override { return {path_}; }
 
   Status read_region(uint32_t channel, uint32_t timepoint, const Box3& box, std::span<uint8_t> dst) override {
     if (dst.size() != box.voxels() * dtype_bytes(info_.dtype)) return invalid_argument("read_region: wrong buffer size");

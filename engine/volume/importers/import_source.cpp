@@ -1,14 +1,19 @@
 #include "volume/importers/import_source.h"
 
+#include <cmath>
 #include <filesystem>
+
+#include "core/output_file.h"
 
 #include "volume/importers/imaris_importer.h"
 #include "volume/importers/ome_tiff_importer.h"
+#include "volume/importers/ome_zarr_importer.h"
 #include "volume/importers/picture_decoder.h"
 #include "volume/importers/raw_importer.h"
 #include "volume/importers/slice_series_importer.h"
 #include "volume/importers/tiff_importer.h"
 #include "volume/importers/tiff_reader.h"
+#include "volume/zarr/ome_zarr.h"
 
 namespace vxr {
 namespace {
@@ -25,8 +30,14 @@ bool ends_with_lower(const std::string& path, std::string_view suffix) {
   return l.size() >= suffix.size() && l.compare(l.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+std::string without_trailing_slashes(std::string path) {
+  while (path.size() > 1 && path.back() == '/') path.pop_back();
+  return path;
+}
+
 // One file: pick the importer by content first, then by name.
 Result<std::unique_ptr<SlabSource>> open_one_file(const std::string& path) {
+  VXR_RETURN_IF_ERROR(check_input(path));  // a FIFO or device would block or never end
   const std::string ext = extension_lower(path);
   if (ext == ".json") return open_raw_import(path);
   if (tiff::has_tiff_magic(path)) return open_tiff_import(path);
@@ -41,7 +52,7 @@ Result<std::unique_ptr<SlabSource>> open_one_file(const std::string& path) {
   if (ext == ".png" || ext == ".jpg" || ext == ".jpeg")
     return invalid_argument(path + ": not a " + ext.substr(1) + " file (wrong signature)");
   return unsupported(path + ": unrecognised input format (import reads TIFF, OME-TIFF, ImageJ TIFF, Imaris .ims, "
-                     "PNG/JPEG slices, or raw+JSON)");
+                     "PNG/JPEG slices, OME-Zarr folders, or raw+JSON)");
 }
 
 
@@ -59,6 +70,7 @@ class HintedSource final : public SlabSource {
   }
   std::vector<std::string> warnings() const override { return inner_->warnings(); }
   std::string format_name() const override { return inner_->format_name(); }
+  std::vector<std::string> files() const override { return inner_->files(); }
 
  private:
   std::unique_ptr<SlabSource> inner_;
@@ -67,13 +79,29 @@ class HintedSource final : public SlabSource {
 
 }  // namespace
 
+bool voxel_size_usable(const std::array<double, 3>& v) {
+  double lo = INFINITY, hi = 0;
+  for (double x : v) {
+    if (!std::isfinite(x) || !(x > 0)) return false;
+    lo = std::min(lo, x);
+    hi = std::max(hi, x);
+  }
+  return hi / lo <= 1e6;  // past that the volume is a sheet thinner than float precision can draw
+}
+
 Result<std::unique_ptr<SlabSource>> open_import_source(const std::vector<std::string>& inputs,
                                                        const ImportHints& hints) {
   if (inputs.empty()) return invalid_argument("no input files given");
   const std::string& first = inputs.front();
   Result<std::unique_ptr<SlabSource>> source = unsupported(first + ": unrecognised input format");
   std::error_code ec;
-  if (inputs.size() > 1 || std::filesystem::is_directory(first, ec) ||
+  if (inputs.size() == 1 && zarr::looks_like_zarr(first)) {
+    source = open_ome_zarr_import(first);
+  } else if (inputs.size() == 1 && ends_with_lower(without_trailing_slashes(first), ".zarr") &&
+             std::filesystem::is_directory(first, ec)) {
+    return invalid_argument(first + ": named like a Zarr folder but holds no .zgroup, .zattrs, .zarray or zarr.json; "
+                            "point at the OME-Zarr image folder");
+  } else if (inputs.size() > 1 || std::filesystem::is_directory(first, ec) ||
       (!std::filesystem::exists(first, ec) && first.find_first_of("*?[") != std::string::npos)) {
     source = open_slice_series_import(inputs);
   } else if (!std::filesystem::exists(first, ec)) {
@@ -82,6 +110,12 @@ Result<std::unique_ptr<SlabSource>> open_import_source(const std::vector<std::st
     source = open_one_file(first);
   }
   if (!source) return source.status();
+  // A zero, negative or non-finite size from a header would draw nothing (or NaN) later on.
+  const auto& vs = (*source)->info().voxel_size;
+  if (!hints.voxel_size && !voxel_size_usable(vs))
+    return invalid_argument(first + ": the file gives a voxel size of " + std::to_string(vs[0]) + " x " +
+                            std::to_string(vs[1]) + " x " + std::to_string(vs[2]) +
+                            ", which vxr cannot draw; give the size with --voxel-size X,Y,Z");
   if (!hints.voxel_size && !hints.unit) return source;
   return std::unique_ptr<SlabSource>(new HintedSource(std::move(source).value(), hints));
 }

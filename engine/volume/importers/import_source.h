@@ -19,6 +19,9 @@ struct ImportHints {
   std::optional<std::string> unit;
 };
 
+// Finite, positive and at most 1e6 between the largest and smallest axis.
+bool voxel_size_usable(const std::array<double, 3>& voxel_size);
+
 // inputs: one file, several files (a slice series), a folder, or a glob.
 // Errors name the offending file and the problem.
 Result<std::unique_ptr<SlabSource>> open_import_source(const std::vector<std::string>& inputs,

@@ -15,6 +15,7 @@ class RawSource final : public SlabSource {
 
   const VolumeInfo& info() const override { return info_; }
   std::string format_name() const override { return "raw volume with JSON sidecar"; }
+  std::vector<std::string> files() const override { return {path_}; }
 
   Status read_region(uint32_t channel, uint32_t timepoint, const Box3& box, std::span<uint8_t> dst) override {
     const uint32_t bpv = dtype_bytes(info_.dtype);

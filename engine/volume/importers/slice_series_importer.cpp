@@ -35,6 +35,7 @@ class PictureSliceSource final : public SlabSource {
       : info_(std::move(info)), files_(std::move(files)), header_(header) {}
 
   const VolumeInfo& info() const override { return info_; }
+  std::vector<std::string> files() const override { return files_; }
   std::string format_name() const override {
     return std::string(header_.format == PictureFormat::kPng ? "PNG" : "JPEG") + " slice series";
   }

@@ -50,6 +50,7 @@ class TiffPlaneSource final : public SlabSource {
   Status read_region(uint32_t channel, uint32_t timepoint, const Box3& box, std::span<uint8_t> dst) override;
   std::vector<std::string> warnings() const override { return warnings_; }
   std::string format_name() const override { return format_; }
+  std::vector<std::string> files() const override { return layout_.files; }
 
  private:
   TiffPlaneSource() = default;
