@@ -41,7 +41,8 @@ Result<gpu::Image*> EyeRenderer::warp_image(size_t index, uint32_t width, uint32
   gpu::Image& img = warped_[index];
   if (img.image && img.extent.width == width && img.extent.height == height && img.format == format) return &img;
   VkImageUsageFlags usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  if (format == VK_FORMAT_R8G8B8A8_UNORM) usage |= VK_IMAGE_USAGE_STORAGE_BIT;
+  // RGBA8: the rays write it; float (sRGB targets): filled by blits, sampled only by the view's creation rules.
+  usage |= format == VK_FORMAT_R8G8B8A8_UNORM ? VK_IMAGE_USAGE_STORAGE_BIT : VK_IMAGE_USAGE_SAMPLED_BIT;
   // Made at the first frame (or when the eye size changes), not per frame.
   VXR_ASSIGN_OR_RETURN(img, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, format, {width, height, 1}, usage,
                                                      "lens-warped eye"}));

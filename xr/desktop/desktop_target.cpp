@@ -146,13 +146,17 @@ Status DesktopTarget::create_swapchain() {
   VXR_VK_TRY(vkGetPhysicalDeviceSurfaceFormatsKHR(ctx_->physical_device(), surface_, &n, formats.data()));
   swap_format_ = VK_FORMAT_UNDEFINED;
   VkColorSpaceKHR space = VK_COLOR_SPACE_SRGB_NONLINEAR_KHR;
-  for (VkFormat want : {VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_R8G8B8A8_UNORM})
+  const std::vector<VkFormat> wanted =
+      o_.srgb_swapchain ? std::vector<VkFormat>{VK_FORMAT_B8G8R8A8_SRGB, VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_UNORM,
+                                                VK_FORMAT_R8G8B8A8_UNORM}
+                        : std::vector<VkFormat>{VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_R8G8B8A8_UNORM};
+  for (VkFormat want : wanted)
     for (const auto& f : formats)
       if (swap_format_ == VK_FORMAT_UNDEFINED && f.format == want) {
         swap_format_ = f.format;
         space = f.colorSpace;
       }
-  if (swap_format_ == VK_FORMAT_UNDEFINED) return unsupported("the window offers no 8-bit UNORM swapchain format");
+  if (swap_format_ == VK_FORMAT_UNDEFINED) return unsupported("the window offers no 8-bit RGBA/BGRA swapchain format");
   if (!(caps.supportedUsageFlags & VK_IMAGE_USAGE_TRANSFER_DST_BIT))
     return unsupported("the window's swapchain images cannot be copied into (no TRANSFER_DST)");
   swap_extent_ = caps.currentExtent.width != UINT32_MAX
