@@ -11,8 +11,11 @@
 //
 // Classification and compositing are the shared core's
 // (include/raycast_core.glsl: vxr_step, vxr_finish), with the same
-// RaycastParams the dense ray caster reads; this file only decides where the
-// samples are and carries a ray's state between passes.
+// RaycastParams the dense ray caster reads: every model, 1-4 channels,
+// gradient opacity, depth colour. This file only decides where the samples
+// are and carries a ray's state between passes. Gradients (gradient opacity,
+// the isosurface normal) read +-1 voxel around a sample: the atlas slots carry
+// an apron of 2 voxels for them (BrickPool).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
@@ -21,7 +24,9 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0) uniform sampler3D atlas_tex;
+// One atlas per channel, all with the same slot layout (BrickPool); slots past
+// the volume's channel count are bound to channel 0's atlas and never read.
+layout(binding = 0) uniform sampler3D atlas_tex[VXR_MAX_CHANNELS];
 layout(binding = 1) uniform sampler2D transfer_tex;  // VXR_TF_SIZE x VXR_MAX_CHANNELS RGBA32F
 layout(binding = 2, rgba8) uniform writeonly image2D out_image;
 layout(binding = 3, rgba32f) uniform image2D accum_image;
@@ -32,37 +37,82 @@ layout(std140, binding = 7) uniform Params { RaycastParams P; };
 
 layout(push_constant) uniform Push { BrickCastParams p; };
 
+// The ray's unit direction in level-0 voxels: samples are taken in the brick's
+// local voxels, depth colour is measured along the whole ray from P.eye.
+vec3 g_dir;
+#define VXR_DEPTH_POS(pos, t) (P.eye.xyz + (t) * g_dir)
+
 #include "include/raycast_core.glsl"
 
 // The brick being marched: vxr_sample reads its atlas slot.
 vec3 g_atlas_origin;
 
 vec4 vxr_sample(vec3 pos) {
-  return vec4(textureLod(atlas_tex, (g_atlas_origin + pos) * p.atlas_inv.xyz, 0.0).r, 0.0, 0.0, 0.0);
+  const vec3 uvw = (g_atlas_origin + pos) * p.atlas_inv.xyz;
+  // Constant indices only: dynamic indexing of sampler arrays needs a feature.
+  vec4 v = vec4(textureLod(atlas_tex[0], uvw, 0.0).r, 0.0, 0.0, 0.0);
+  const int n = VXR_SC_CHANNELS;
+  if (n > 1) v.y = textureLod(atlas_tex[1], uvw, 0.0).r;
+  if (n > 2) v.z = textureLod(atlas_tex[2], uvw, 0.0).r;
+  if (n > 3) v.w = textureLod(atlas_tex[3], uvw, 0.0).r;
+  return v;
 }
 
 vec4 vxr_transfer(int channel, float x) { return vxr_transfer_table(transfer_tex, channel, x); }
 
-// A ray's state between passes, one channel: EA and emission keep colour and
-// optical depth, MIP the largest windowed value.
+// A ray's state between passes in one RGBA32F texel. The CPU sends only
+// variants whose state fits to the multipass waves (brick_state_fits_texel);
+// the others march in one dispatch (tiled or single pass) and never get here.
+//   EA (one channel, or composite): colour and optical depth.
+//   emission: the colour summed over channels (the finish sums them anyway).
+//   MIP/MinIP, one channel: the extreme value, its depth coordinate, count.
+//   average, <= 3 channels: the length-weighted sums and the length.
+//   iso: before the crossing the previous sample and its t (alpha 0), after
+//   it the shaded colour (alpha 1).
 vec4 pack_ray(VxrRay r) {
-  if (VXR_SC_MODEL == VXR_MODEL_MIP) return vec4(r.reduce.x, r.reduce_depth.x, r.count, 0.0);
+  const uint m = VXR_SC_MODEL;
+  if (m == VXR_MODEL_MIP || m == VXR_MODEL_MINIP) return vec4(r.reduce.x, r.reduce_depth.x, r.count, 0.0);
+  if (m == VXR_MODEL_AVERAGE) return vec4(r.reduce.xyz, r.count);
+  if (m == VXR_MODEL_ISOSURFACE) return r.done ? r.acc[0] : vec4(r.prev_value, r.prev_t, 0.0, 0.0);
+  if (m == VXR_MODEL_EMISSION) return vec4(r.acc[0].rgb + r.acc[1].rgb + r.acc[2].rgb + r.acc[3].rgb, 0.0);
   return vec4(r.acc[0].rgb, r.tau.x);
 }
 
 VxrRay unpack_ray(vec4 v) {
   VxrRay r = vxr_begin(P);
-  if (VXR_SC_MODEL == VXR_MODEL_MIP) {
+  const uint m = VXR_SC_MODEL;
+  if (m == VXR_MODEL_MIP || m == VXR_MODEL_MINIP) {
     r.reduce.x = v.x;
     r.reduce_depth.x = v.y;
     r.count = v.z;
+  } else if (m == VXR_MODEL_AVERAGE) {
+    r.reduce.xyz = v.xyz;
+    r.count = v.w;
+  } else if (m == VXR_MODEL_ISOSURFACE) {
+    r.done = v.a > 0.5;
+    if (r.done) {
+      r.acc[0] = v;
+      r.hit_t = 0.0;
+    } else {
+      r.prev_value = v.x;
+      r.prev_t = v.y;
+    }
+  } else if (m == VXR_MODEL_EMISSION) {
+    r.acc[0].rgb = v.rgb;
   } else {
     r.acc[0].rgb = v.rgb;
     r.tau.x = v.a;
     r.trans = exp(-r.tau.x);
-    r.done = VXR_SC_MODEL == VXR_MODEL_EMISSION_ABSORPTION && r.trans <= P.march.z;
+    r.done = r.trans <= P.march.z;
   }
   return r;
+}
+
+// The finished pixel: the core's, except the isosurface, whose colour was
+// shaded while the crossing's brick was bound.
+vec4 finish_ray(VxrRay r) {
+  if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE) return r.done ? r.acc[0] : vec4(0.0);
+  return vxr_finish(r, P, vec3(0.0), g_dir);
 }
 
 // The ray's segment [t0, t1) inside brick b (its clip box and cut plane), in
@@ -103,6 +153,7 @@ void main() {
 
   vec2 ndc = (vec2(pix) + 0.5) / vec2(width, height) * 2.0 - 1.0;
   vec3 dir = normalize(P.forward.xyz + ndc.x * P.right.xyz - ndc.y * P.up.xyz);
+  g_dir = dir;
 
   float t0, t1;
   // A work item's pixel that misses its brick leaves the accumulation alone.
@@ -130,8 +181,11 @@ void main() {
     const int n = int(ceil(t1 / dt - 0.5) - i0);
     for (int k = 0; k < n && !ray.done; ++k) {
       // From the index: no drift. The segment is dt level-0 voxels long.
-      vxr_step(ray, P, e, dl, (i0 + float(k) + 0.5) * dt, dt);
+      const float t = (i0 + float(k) + 0.5) * dt;
+      vxr_step(ray, P, e, dl, t, dt);
       ++taken;
+      // The crossing's normal needs its brick's voxels: shade it now.
+      if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
     }
   }
 
@@ -143,7 +197,7 @@ void main() {
   }
   if ((flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), pack_ray(ray));
   if ((flags & VXR_BRICK_STORE_FINAL) != 0u) {
-    vec4 c = vxr_finish(ray, P, vec3(0.0), dir);
+    vec4 c = finish_ray(ray);
     if ((flags & VXR_BRICK_OPAQUE) != 0u) c.a = 1.0;  // premultiplied over black
     // k / 255 converts to byte k under any rounding the conversion uses.
     if ((flags & VXR_BRICK_QUANTIZE) != 0u) c = floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5) / 255.0;

@@ -41,10 +41,25 @@ step(0 "^skeleton 1: 8 nodes from .*Neuron_missing_ids.swc \\(3 warnings\\)\n$"
      annotate import-swc ${S} ${TESTDATA}/swc-malformed/Neuron_missing_ids.swc)
 step(1 "^$" "^vxr: [^\n]*repeated_id.swc:6: sample id 4 is repeated \\(first defined on line 5\\); make ids unique\n$"
      annotate import-swc ${S} ${TESTDATA}/swc-malformed/repeated_id.swc)
+# Tracing edits on that skeleton: 1 root; 2<-1, 3<-2, 4<-3, 5<-3, 6<-1; 8 and 9 roots.
+step(0 "^node 10\n$" "^$" annotate edit-skeleton ${S} --skeleton 1 --add 2,2,2 --parent 9 --radius 0.5 --type 3)
+step(0 "^ok\n$" "^$" annotate edit-skeleton ${S} --skeleton 1 --move 10 --to 3,3,3)
+step(0 "^ok\n$" "^$" annotate edit-skeleton ${S} --skeleton 1 --reparent 8 --parent 6)
+step(2 "^$" "cannot attach node 1 under 3: that node is in its own subtree \\(a cycle\\)"
+     annotate edit-skeleton ${S} --skeleton 1 --reparent 1 --parent 3)
+step(2 "^$" "give exactly one of" annotate edit-skeleton ${S} --skeleton 1 --delete 4 --split 2)
+step(0 "^skeleton 2\n$" "^$" annotate edit-skeleton ${S} --skeleton 1 --split 2)
+step(0 "^merged 4 nodes into skeleton 1; node 3 is now 12\n$" "^$"
+     annotate edit-skeleton ${S} --skeleton 1 --merge-from 2 --from-node 3 --parent 9)
+step(0 "^ok\n$" "^$" annotate edit-skeleton ${S} --skeleton 1 --delete 6)
+step(2 "^$" "no node 6" annotate edit-skeleton ${S} --skeleton 1 --delete 6)
+step(0 "1 skeletons.*skeleton 1 Neuron_missing_ids.swc: 8 nodes, 2 roots" "^$" annotate list ${S})
 step(0 "n.swc: 8 samples" "^$" annotate export-swc ${S} --skeleton 1 -o ${DIR}/n.swc)
 file(READ ${DIR}/n.swc swc)
-if(NOT swc MATCHES "\n1 1 0 0 0 1 -1\n2 3 0 0 0 1 1\n3 3 0 5 0 1 2\n")
-  message(FATAL_ERROR "exported SWC lost the micrometre coordinates:\n${swc}")
+# Parents first, micrometres: root 1, then 8 (under 6, which was deleted, so now under 1), root 9, the added node
+# (voxel 3,3,3 = 1.5,1.5,6 um), then the merged tree re-rooted at its old node 3.
+if(NOT swc MATCHES "\n1 1 0 0 0 1 -1\n2 2 6 -4 0 0 1\n3 2 -5 -4 0 0 -1\n4 3 1.5 1.5 6 0.5 3\n5 3 0 5 0 1 3\n")
+  message(FATAL_ERROR "exported SWC does not hold the edited tree:\n${swc}")
 endif()
 step(2 "^$" "that is the annotation store" annotate export-swc ${S} --skeleton 1 -o ${S}/CURRENT)
 step(2 "^$" "no skeleton 9" annotate export-swc ${S} --skeleton 9 -o ${DIR}/x.swc)
@@ -54,14 +69,16 @@ file(READ ${DIR}/tracks.csv csv)
 if(NOT csv STREQUAL "track,name,step,marker,timepoint,x,y,z,step_length_um\n1,cellA,0,1,0,1,2,3,\n1,cellA,1,2,1,4,5,6,6.363961030678928\n")
   message(FATAL_ERROR "tracks.csv:\n${csv}")
 endif()
-step(0 "3 markers, 1 measurements, 1 skeletons, 1 tracks, 1 ROIs, 0 cards\n.*skeleton 1 Neuron_missing_ids.swc: 8 nodes, 3 roots"
+step(0 "3 markers, 1 measurements, 1 skeletons, 1 tracks, 1 ROIs, 0 cards\n.*skeleton 1 Neuron_missing_ids.swc: 8 nodes, 2 roots"
      "^$" annotate list ${S})
 
 step(0 "^card 1\n$" "^$" cards add ${S} --title "Spine cluster" --note "Dense spines near the soma"
      --scene ${SRC}/tests/data/card_scene.json --snapshot ${SRC}/golden_images/model_ea.png)
-step(0 "^card 2\n$" "^$" cards add ${S} --note "axon bouton")
+step(0 "^card 2\n$" "^$" cards add ${S} --note "axon bouton" --snapshot-path ${SRC}/golden_images/model_ea.png)
 step(2 "^$" "card snapshot is not a PNG file" cards add ${S} --note x --snapshot ${SRC}/tests/data/card_scene.json)
-step(0 "^1\t[0-9-]+ [0-9:]+ UTC\tSpine cluster  \\[snapshot\\]\n2\t[^\n]*\taxon bouton\n$" "^$" cards list ${S})
+step(0 "^1\t[0-9-]+ [0-9:]+ UTC\tSpine cluster  \\[snapshot\\]\n2\t[^\n]*\taxon bouton  \\[snapshot\\]\n$" "^$" cards list ${S})
+step(0 "snapshot: [^\n]*golden_images/model_ea.png\n" "^$" cards show ${S} 2)
+step(2 "^$" "--snapshot-path /nonexistent.png: no such file" cards add ${S} --snapshot-path /nonexistent.png)
 step(0 "^1\t[^\n]*Spine cluster[^\n]*\n$" "^$" cards search ${S} SPINES soma)
 step(1 "^$" "no card matches 'dendrite'" cards search ${S} dendrite)
 step(0 "title: Spine cluster\n.*note:\nDense spines near the soma\nscene:\n.*\"model\": \"mip\"" "^$" cards show ${S} 1)

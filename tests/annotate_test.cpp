@@ -68,7 +68,9 @@ std::set<SwcWarningKind> kinds(const SwcFile& f) {
   return out;
 }
 
-double dist(const Vec3& a, const Vec3& b) { return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); }
+double dist(const Vec3& a, const Vec3& b) {
+  return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+}
 
 // Same tree: `b` is `a` renumbered by `map` (a id -> b id), same coordinates within tol.
 void check_same_tree(const Skeleton& a, const Skeleton& b, const std::map<int64_t, int64_t>& map, double tol) {
@@ -148,6 +150,10 @@ TEST_CASE("swc: broken lines are one error naming file and line, never a crash")
   CHECK(loop.status().message().rfind("d.swc:", 0) == 0);
   auto self = parse_swc("1 1 0 0 0 1 1\n", "e.swc");
   CHECK(self.status().message() == "e.swc:1: sample 1 is its own parent");
+  auto empty = parse_swc("# only a comment\r\n\n", "f.swc");
+  CHECK(empty.status().message() == "f.swc: no samples (lines of id type x y z radius parent); is this an SWC file?");
+  auto binary = parse_swc("\x89PNG\x01 1 2 3 4 5 6\n", "g.swc");
+  CHECK(binary.status().message() == "g.swc:1: id '?PNG?' is not a number");
   auto missing = read_swc("/nonexistent/x.swc");
   CHECK(missing.status().message() == "/nonexistent/x.swc: no such file");
 }
@@ -244,7 +250,8 @@ TEST_CASE("swc: every file in testdata/swc-malformed loads with warnings or fail
     auto f = read_swc(path);
     if (f.is_ok()) {
       CHECK_FALSE(f->warnings.empty());
-      for (const SwcWarning& w : f->warnings) CHECK(w.message.rfind(path + ":" + std::to_string(w.line) + ": ", 0) == 0);
+      for (const SwcWarning& w : f->warnings)
+        CHECK(w.message.rfind(path + ":" + std::to_string(w.line) + ": ", 0) == 0);
       CHECK(skeleton_from_swc(*f).validate().is_ok());
     } else {
       CHECK(f.status().message().rfind(path + ":", 0) == 0);
@@ -272,7 +279,7 @@ Skeleton small_tree() {
 }
 }  // namespace
 
-TEST_CASE("skeleton: add refuses a missing parent or a repeated id; move changes only the position") {
+TEST_CASE("skeleton: add refuses a missing parent or a repeated id, and move changes only the position") {
   Skeleton sk = small_tree();
   SkeletonNode orphan;
   orphan.parent = 42;
@@ -289,7 +296,7 @@ TEST_CASE("skeleton: add refuses a missing parent or a repeated id; move changes
   CHECK(sk.validate().is_ok());
 }
 
-TEST_CASE("skeleton: deleting a node hands its children to its parent; deleting a root makes them roots") {
+TEST_CASE("skeleton: deleting a node hands its children to its parent, and deleting a root makes them roots") {
   Skeleton sk = small_tree();
   REQUIRE(sk.delete_node(2).is_ok());
   CHECK(sk.find(3)->parent == 1);
@@ -320,7 +327,7 @@ TEST_CASE("skeleton: reparent moves a subtree and refuses to create a cycle") {
   CHECK(sk.validate().is_ok());
 }
 
-TEST_CASE("skeleton: split detaches a subtree as a new tree; merge re-roots and attaches with fresh ids") {
+TEST_CASE("skeleton: split detaches a subtree as a new tree, and merge re-roots and attaches with fresh ids") {
   Skeleton sk = small_tree();
   auto part = sk.split(2);
   REQUIRE(part.is_ok());
@@ -434,7 +441,7 @@ TEST_CASE("store: measurement length uses the anisotropic voxel size and unit") 
   CHECK(s->set_voxel_space({{1, 1, 1}, "furlong"}).code() == ErrorCode::kInvalidArgument);
 }
 
-TEST_CASE("store: markers count per class and timepoint; CSV quotes awkward class names") {
+TEST_CASE("store: markers count per class and timepoint, and CSV quotes awkward class names") {
   auto s = open_new("markers");
   for (int i = 0; i < 7; ++i) {
     Marker m;
@@ -529,7 +536,7 @@ TEST_CASE("store: an ROI query returns exactly the annotations inside the box") 
 
 // ---------------------------------------------------------------- cards
 
-TEST_CASE("store: a card keeps its scene, note, snapshot and memo byte for byte; search matches every word") {
+TEST_CASE("store: a card keeps its scene, note, snapshot and memo byte for byte, and search matches every word") {
   const std::string dir = fresh_dir("cards");
   Scene scene;
   scene.volume = "head.vxc";
@@ -588,7 +595,8 @@ TEST_CASE("store: opening refuses a missing store, a second opener, a newer sche
   const std::string missing = fresh_dir("missing");
   auto none = AnnotationStore::open(missing, false);
   CHECK(none.status().code() == ErrorCode::kNotFound);
-  CHECK(none.status().message() == missing + ": no annotation store here (create one with `vxr annotate init " + missing + "`)");
+  CHECK(none.status().message() ==
+        missing + ": no annotation store here (create one with `vxr annotate init " + missing + "`)");
 
   const std::string dir = fresh_dir("schema");
   {
@@ -606,7 +614,8 @@ TEST_CASE("store: opening refuses a missing store, a second opener, a newer sche
   }
   auto newer = AnnotationStore::open(dir, false);
   CHECK(newer.status().code() == ErrorCode::kUnsupported);
-  CHECK(newer.status().message() == dir + ": annotation store schema version 2 is newer than this vxr reads (version 1); open it with a newer vxr");
+  CHECK(newer.status().message() ==
+        dir + ": annotation store schema version 2 is newer than this vxr reads (version 1); open it with a newer vxr");
 
   const std::string foreign = fresh_dir("foreign");
   {
@@ -620,6 +629,31 @@ TEST_CASE("store: opening refuses a missing store, a second opener, a newer sche
   auto f = AnnotationStore::open(foreign, true);
   CHECK(f.status().code() == ErrorCode::kCorrupt);
   CHECK(f.status().message().find("is not a vxr annotation store") != std::string::npos);
+}
+
+TEST_CASE("store: a damaged write-ahead log is reported as corrupt, never skipped") {
+  const std::string dir = fresh_dir("damaged");
+  {
+    auto s = AnnotationStore::open(dir, true);
+    REQUIRE(s.is_ok());
+    for (int i = 0; i < 20; ++i) {
+      Marker m;
+      m.pos = {double(i), 0, 0};
+      REQUIRE((*s)->add_marker(m).is_ok());
+    }
+  }
+  fs::path log;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".log" && fs::file_size(e.path()) > 200) log = e.path();
+  REQUIRE_FALSE(log.empty());
+  {
+    std::fstream f(log, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(fs::file_size(log) / 2));
+    f.write("XXXXXXXX", 8);
+  }
+  auto s = AnnotationStore::open(dir, false);
+  CHECK(s.status().code() == ErrorCode::kCorrupt);
+  CHECK(s.status().message().rfind(dir + ": annotation store is damaged (Corruption: ", 0) == 0);
 }
 
 // ---------------------------------------------------------------- kill -9
@@ -715,8 +749,18 @@ TEST_CASE("store: killed with SIGKILL at 60 random moments, every acknowledged w
         CHECK(c->snapshot_png.size() == size_t(a.seq) + 9);
       }
     }
-    if (auto sks = (*s)->skeletons(); sks.is_ok() && !sks->empty()) CHECK((*s)->skeleton(sks->front().id).is_ok());
+    // Nothing half-written either: every card present has its snapshot, every skeleton is a valid tree.
+    auto cards = (*s)->cards();
+    REQUIRE(cards.is_ok());
+    for (const Card& c : *cards) {
+      auto full = (*s)->card(c.id);
+      CHECK_MESSAGE(full.is_ok(), full.status().message());
+    }
+    auto sks = (*s)->skeletons();
+    REQUIRE(sks.is_ok());
+    for (const SkeletonInfo& k : *sks) CHECK((*s)->skeleton(k.id).is_ok());
   }
-  MESSAGE(acked.size() << " acknowledged writes over 60 kills, " << kills_mid_write << " kills after at least one write");
+  MESSAGE(acked.size() << " acknowledged writes over 60 kills, " << kills_mid_write
+                       << " kills after at least one write");
   CHECK(kills_mid_write >= 40);
 }

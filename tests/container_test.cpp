@@ -344,7 +344,7 @@ TEST_CASE("corruption: a flipped byte in a chunk record header is found and read
   CHECK((*r)->read(key_of(victim)).status().code() == ErrorCode::kCorrupt);
 }
 
-TEST_CASE("corruption: a flipped byte in the index or the footer is found; the file will not open") {
+TEST_CASE("corruption: a flipped byte in the index or the footer is found, the file will not open") {
   for (const char* where : {"index", "footer", "file header"}) {
     CAPTURE(where);
     const std::string out = build_for_corruption(test_dir(std::string("corrupt_") + where));

@@ -107,7 +107,7 @@ TEST_CASE("output safety: export-tiff and render refuse their input .vxc, also t
   CHECK(no_partial_left(dir));
 }
 
-TEST_CASE("output safety: render refuses to overwrite its settings file; compare refuses to overwrite an image") {
+TEST_CASE("output safety: render refuses to overwrite its settings file, compare refuses to overwrite an image") {
   const fs::path dir = scratch("settings_self");
   const fs::path settings = dir / "s.json";
   std::ofstream(settings) << R"({"model": "mip"})";

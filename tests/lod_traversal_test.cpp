@@ -29,9 +29,13 @@ LodView view_of(const ChunkSource& src, const Camera& cam, uint32_t w, uint32_t 
   return {r.eye, r.forward, r.right, r.up, w, h};
 }
 
-LodQueries all_resident() {
+// Visible: some payload voxel above 8 (the tests' stand-in for a transfer function).
+LodQueries all_resident(const ChunkSource& src) {
   LodQueries q;
-  q.visible = [](double, double hi) { return hi > 8; };
+  q.visible = [&src](const ChunkKey& k) {
+    auto st = src.stats(k);
+    return !st || st->max > 8;
+  };
   q.resident = [](const ChunkKey&) { return true; };
   return q;
 }
@@ -66,7 +70,7 @@ TEST_CASE("lod: the level follows the distance, and a 65536^3 volume from afar d
   auto small = make(256), big = make(65536);
   LodSettings s;
   s.skip_empty = false;
-  const auto q = all_resident();
+  const auto q = all_resident(*small);  // skip_empty is off: visible is never asked
   const Camera cs = orbit_camera({{256, 256, 256}, {1, 1, 1}}, 30, 25, 1.6);
   const Camera cb = orbit_camera({{65536, 65536, 65536}, {1, 1, 1}}, 30, 25, 1.6);
   const LodResult a = traverse_lod(*small, view_of(*small, cs, 128, 128), s, q);
@@ -94,7 +98,7 @@ TEST_CASE("lod: bricks come out front to back along every ray") {
   s.skip_empty = false;
   const Camera cam = orbit_camera({{4096, 4096, 4096}, {1, 1, 1}}, 40, 30, 0.45, 60);
   const LodView v = view_of(*src, cam, 128, 128);
-  const LodResult r = traverse_lod(*src, v, s, all_resident());
+  const LodResult r = traverse_lod(*src, v, s, all_resident(*src));
   std::set<uint32_t> levels;
   for (const auto& k : r.draw) levels.insert(k.level);
   CHECK(levels.size() >= 3);  // a close view mixes levels
@@ -122,15 +126,15 @@ TEST_CASE("lod: frustum, cut plane and ROI cull whole bricks, and empty bricks a
   LodSettings s;
   s.skip_empty = false;
   s.force_level = 0;
-  const LodResult all = traverse_lod(*src, v, s, all_resident());
+  const LodResult all = traverse_lod(*src, v, s, all_resident(*src));
   CHECK(all.stats.culled > 0);
   CHECK(all.draw.size() < 512u);
   s.frustum_cull = false;
-  const LodResult nocull = traverse_lod(*src, v, s, all_resident());
+  const LodResult nocull = traverse_lod(*src, v, s, all_resident(*src));
   CHECK(nocull.draw.size() == 512u);
 
   s.cut = {true, glm::normalize(glm::dvec3(1, 1, 0)), -256.0};  // keeps x + y >= 256 * sqrt(2)
-  const LodResult cut = traverse_lod(*src, v, s, all_resident());
+  const LodResult cut = traverse_lod(*src, v, s, all_resident(*src));
   for (const auto& k : cut.draw) {
     const BrickBox b = chunk_box(*src, k);
     CHECK(b.hi.x + b.hi.y >= 256.0 * std::sqrt(2.0) - 1e-9);
@@ -139,12 +143,12 @@ TEST_CASE("lod: frustum, cut plane and ROI cull whole bricks, and empty bricks a
 
   s.cut.enabled = false;
   s.roi = {true, {64, 64, 64}, {128, 100, 192}};
-  const LodResult roi = traverse_lod(*src, v, s, all_resident());
+  const LodResult roi = traverse_lod(*src, v, s, all_resident(*src));
   CHECK(roi.draw.size() == 2u * 2u * 4u);  // x 64..128, y 64..100 -> 2 chunks, z 64..192 -> 4
 
   s.roi.enabled = false;
   s.skip_empty = true;
-  const LodResult skip = traverse_lod(*src, v, s, all_resident());
+  const LodResult skip = traverse_lod(*src, v, s, all_resident(*src));
   CHECK(skip.stats.skipped_empty > 0);
   CHECK(skip.draw.size() + skip.stats.skipped_empty == nocull.draw.size());
   for (const auto& k : skip.draw) CHECK(src->stats(k)->max > 8);
@@ -160,9 +164,9 @@ TEST_CASE("lod: missing bricks are requested and their resident ancestor drawn, 
   std::set<std::tuple<uint32_t, uint32_t, uint32_t, uint32_t>> resident;
   const uint32_t top = static_cast<uint32_t>(src->levels().size()) - 1;
   resident.insert({top, 0, 0, 0});
-  LodQueries q = all_resident();
+  LodQueries q = all_resident(*src);
   q.resident = [&](const ChunkKey& k) { return resident.count({k.level, k.x, k.y, k.z}) != 0; };
-  const LodResult full = traverse_lod(*src, v, s, all_resident());
+  const LodResult full = traverse_lod(*src, v, s, all_resident(*src));
   int frames = 0;
   for (; frames < 40; ++frames) {
     const LodResult r = traverse_lod(*src, v, s, q);

@@ -33,7 +33,7 @@ TEST_CASE("lens warp: 0.5625x the rays and under 2/255 mean error on the sample 
   REQUIRE(source.is_ok());
   auto eyes = EyeRenderer::create(test::gpu_context(), *source);
   REQUIRE(eyes.is_ok());
-  const VolumeTransform t = default_volume_transform((*eyes)->placement());
+  const xr::VolumeTransform t = default_volume_transform((*eyes)->placement());
   ViewSpec view;
   view.pose.position = {0.03, 1.62, -0.30};  // close: the head reaches into the outer bands
   view.fov = {-0.785398, 0.698132, 0.785398, -0.785398};

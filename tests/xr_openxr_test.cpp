@@ -105,10 +105,10 @@ TEST_CASE("openxr: scripted grab-move and two-hand pinch through the runtime mov
       {"frame": 30, "left": {"grip": {"position": [-0.2, 1.4, -0.4]}}, "right": {"grip": {"position": [0.2, 1.4, -0.4]}}}
     ]})");
   const DenseVolume v = sample();
-  const VolumeTransform t0 = default_volume_transform({v.dims, v.voxel_size});
+  const xr::VolumeTransform t0 = default_volume_transform({v.dims, v.voxel_size});
   auto stats = run(v, 36);
   REQUIRE_MESSAGE(stats.is_ok(), stats.status().to_string());
-  const VolumeTransform& t = stats->transform;
+  const xr::VolumeTransform& t = stats->transform;
   // One hand moved the volume by (0.1, 0.1, 0); the pinch doubled the hand distance
   // about the fixed midpoint (0, 1.4, -0.4): x' = mid + 2 (x - mid).
   const glm::dvec3 moved = t0.position + glm::dvec3(0.1, 0.1, 0.0);
@@ -130,7 +130,7 @@ TEST_CASE("openxr: scripted grab-move and two-hand pinch through the runtime mov
 TEST_CASE("openxr: every suggested controller profile delivers grab, grip pose and haptics") {
   test::GpuTestScope scope;
   const DenseVolume v = sample();
-  const VolumeTransform t0 = default_volume_transform({v.dims, v.voxel_size});
+  const xr::VolumeTransform t0 = default_volume_transform({v.dims, v.voxel_size});
   for (const char* profile : {"khr/simple_controller", "oculus/touch_controller", "htc/vive_controller",
                               "valve/index_controller", "microsoft/motion_controller"}) {
     INFO(std::string(profile));

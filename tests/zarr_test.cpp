@@ -48,7 +48,9 @@ void write_file(const fs::path& p, const std::vector<uint8_t>& bytes) {
   std::ofstream f(p, std::ios::binary);
   f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
-void write_text(const fs::path& p, const std::string& text) { write_file(p, std::vector<uint8_t>(text.begin(), text.end())); }
+void write_text(const fs::path& p, const std::string& text) {
+  write_file(p, std::vector<uint8_t>(text.begin(), text.end()));
+}
 std::string read_text(const fs::path& p) {
   std::ifstream f(p, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(f), {});
@@ -81,13 +83,27 @@ Volume make_volume(std::vector<uint64_t> shape, DType t, uint64_t seed = 1) {
   for (uint64_t i = 0; i < v.values.size(); ++i) {
     const uint64_t h = (i * 2654435761ull + seed * 97) % 1000003;
     switch (t) {
-      case DType::kU8: v.values[i] = double(h % 251); break;
-      case DType::kI8: v.values[i] = double(int(h % 251) - 125); break;
-      case DType::kU16: v.values[i] = double(h % 65521); break;
-      case DType::kI16: v.values[i] = double(int(h % 65521) - 32760); break;
-      case DType::kU32: v.values[i] = double(h * 4099); break;
-      case DType::kI32: v.values[i] = double(int64_t(h) * 2047 - 1000000000); break;
-      case DType::kF32: v.values[i] = double(float(h) * 0.25f - 1000.0f); break;
+      case DType::kU8:
+        v.values[i] = double(h % 251);
+        break;
+      case DType::kI8:
+        v.values[i] = double(int(h % 251) - 125);
+        break;
+      case DType::kU16:
+        v.values[i] = double(h % 65521);
+        break;
+      case DType::kI16:
+        v.values[i] = double(int(h % 65521) - 32760);
+        break;
+      case DType::kU32:
+        v.values[i] = double(h * 4099);
+        break;
+      case DType::kI32:
+        v.values[i] = double(int64_t(h) * 2047 - 1000000000);
+        break;
+      case DType::kF32:
+        v.values[i] = double(float(h) * 0.25f - 1000.0f);
+        break;
     }
   }
   return v;
@@ -95,24 +111,74 @@ Volume make_volume(std::vector<uint64_t> shape, DType t, uint64_t seed = 1) {
 
 void put_value(DType t, double v, uint8_t* out) {
   switch (t) {
-    case DType::kU8: { uint8_t x = uint8_t(v); std::memcpy(out, &x, 1); break; }
-    case DType::kI8: { int8_t x = int8_t(v); std::memcpy(out, &x, 1); break; }
-    case DType::kU16: { uint16_t x = uint16_t(v); std::memcpy(out, &x, 2); break; }
-    case DType::kI16: { int16_t x = int16_t(v); std::memcpy(out, &x, 2); break; }
-    case DType::kU32: { uint32_t x = uint32_t(v); std::memcpy(out, &x, 4); break; }
-    case DType::kI32: { int32_t x = int32_t(v); std::memcpy(out, &x, 4); break; }
-    case DType::kF32: { float x = float(v); std::memcpy(out, &x, 4); break; }
+    case DType::kU8: {
+      uint8_t x = uint8_t(v);
+      std::memcpy(out, &x, 1);
+      break;
+    }
+    case DType::kI8: {
+      int8_t x = int8_t(v);
+      std::memcpy(out, &x, 1);
+      break;
+    }
+    case DType::kU16: {
+      uint16_t x = uint16_t(v);
+      std::memcpy(out, &x, 2);
+      break;
+    }
+    case DType::kI16: {
+      int16_t x = int16_t(v);
+      std::memcpy(out, &x, 2);
+      break;
+    }
+    case DType::kU32: {
+      uint32_t x = uint32_t(v);
+      std::memcpy(out, &x, 4);
+      break;
+    }
+    case DType::kI32: {
+      int32_t x = int32_t(v);
+      std::memcpy(out, &x, 4);
+      break;
+    }
+    case DType::kF32: {
+      float x = float(v);
+      std::memcpy(out, &x, 4);
+      break;
+    }
   }
 }
 double get_value(DType t, const uint8_t* p) {
   switch (t) {
-    case DType::kU8: return *p;
-    case DType::kI8: return int8_t(*p);
-    case DType::kU16: { uint16_t x; std::memcpy(&x, p, 2); return x; }
-    case DType::kI16: { int16_t x; std::memcpy(&x, p, 2); return x; }
-    case DType::kU32: { uint32_t x; std::memcpy(&x, p, 4); return x; }
-    case DType::kI32: { int32_t x; std::memcpy(&x, p, 4); return x; }
-    case DType::kF32: { float x; std::memcpy(&x, p, 4); return x; }
+    case DType::kU8:
+      return *p;
+    case DType::kI8:
+      return int8_t(*p);
+    case DType::kU16: {
+      uint16_t x;
+      std::memcpy(&x, p, 2);
+      return x;
+    }
+    case DType::kI16: {
+      int16_t x;
+      std::memcpy(&x, p, 2);
+      return x;
+    }
+    case DType::kU32: {
+      uint32_t x;
+      std::memcpy(&x, p, 4);
+      return x;
+    }
+    case DType::kI32: {
+      int32_t x;
+      std::memcpy(&x, p, 4);
+      return x;
+    }
+    case DType::kF32: {
+      float x;
+      std::memcpy(&x, p, 4);
+      return x;
+    }
   }
   return 0;
 }
@@ -121,14 +187,14 @@ struct ArraySpec {
   int zarr_format = 2;
   std::vector<uint64_t> chunks;
   bool big_endian = false;
-  bool fortran = false;                // v2 order "F"
+  bool fortran = false;  // v2 order "F"
   std::vector<zarr::BytesCodec> codecs;
-  char separator = '.';                // v2 dimension_separator; v3 chunk key separator
-  bool v3_v2_keys = false;             // v3 chunk_key_encoding "v2"
-  std::vector<uint64_t> shard;         // v3 sharding: shard shape (chunks = inner shape)
+  char separator = '.';         // v2 dimension_separator; v3 chunk key separator
+  bool v3_v2_keys = false;      // v3 chunk_key_encoding "v2"
+  std::vector<uint64_t> shard;  // v3 sharding: shard shape (chunks = inner shape)
   bool index_at_start = false;
   double fill = 0;
-  bool omit_fill_chunks = false;       // chunks (inner chunks, shards) of only fill are not written
+  bool omit_fill_chunks = false;  // chunks (inner chunks, shards) of only fill are not written
   std::vector<std::string> dimension_names;
 };
 
@@ -142,27 +208,45 @@ std::string v3_dtype(DType t) {
 }
 json v2_compressor(const zarr::BytesCodec& c) {
   switch (c.id) {
-    case zarr::CodecId::kGzip: return {{"id", "gzip"}, {"level", c.level}};
-    case zarr::CodecId::kZlib: return {{"id", "zlib"}, {"level", c.level}};
-    case zarr::CodecId::kZstd: return {{"id", "zstd"}, {"level", c.level}};
+    case zarr::CodecId::kGzip:
+      return {{"id", "gzip"}, {"level", c.level}};
+    case zarr::CodecId::kZlib:
+      return {{"id", "zlib"}, {"level", c.level}};
+    case zarr::CodecId::kZstd:
+      return {{"id", "zstd"}, {"level", c.level}};
     case zarr::CodecId::kBlosc:
-      return {{"id", "blosc"}, {"cname", c.blosc_cname}, {"clevel", c.level}, {"shuffle", c.blosc_shuffle}, {"blocksize", 0}};
-    case zarr::CodecId::kLz4: return {{"id", "lz4"}, {"acceleration", 1}};
-    default: return nullptr;
+      return {{"id", "blosc"},
+              {"cname", c.blosc_cname},
+              {"clevel", c.level},
+              {"shuffle", c.blosc_shuffle},
+              {"blocksize", 0}};
+    case zarr::CodecId::kLz4:
+      return {{"id", "lz4"}, {"acceleration", 1}};
+    default:
+      return nullptr;
   }
 }
 json v3_codec(const zarr::BytesCodec& c) {
   const char* shuffles[] = {"noshuffle", "shuffle", "bitshuffle"};
   switch (c.id) {
-    case zarr::CodecId::kGzip: return {{"name", "gzip"}, {"configuration", {{"level", c.level}}}};
-    case zarr::CodecId::kZlib: return {{"name", "numcodecs.zlib"}, {"configuration", {{"level", c.level}}}};
-    case zarr::CodecId::kZstd: return {{"name", "zstd"}, {"configuration", {{"level", c.level}, {"checksum", false}}}};
+    case zarr::CodecId::kGzip:
+      return {{"name", "gzip"}, {"configuration", {{"level", c.level}}}};
+    case zarr::CodecId::kZlib:
+      return {{"name", "numcodecs.zlib"}, {"configuration", {{"level", c.level}}}};
+    case zarr::CodecId::kZstd:
+      return {{"name", "zstd"}, {"configuration", {{"level", c.level}, {"checksum", false}}}};
     case zarr::CodecId::kBlosc:
       return {{"name", "blosc"},
-              {"configuration", {{"cname", c.blosc_cname}, {"clevel", c.level}, {"shuffle", shuffles[c.blosc_shuffle]},
-                                 {"typesize", c.blosc_typesize}, {"blocksize", 0}}}};
-    case zarr::CodecId::kLz4: return {{"name", "numcodecs.lz4"}, {"configuration", {{"acceleration", 1}}}};
-    case zarr::CodecId::kCrc32c: return {{"name", "crc32c"}};
+              {"configuration",
+               {{"cname", c.blosc_cname},
+                {"clevel", c.level},
+                {"shuffle", shuffles[c.blosc_shuffle]},
+                {"typesize", c.blosc_typesize},
+                {"blocksize", 0}}}};
+    case zarr::CodecId::kLz4:
+      return {{"name", "numcodecs.lz4"}, {"configuration", {{"acceleration", 1}}}};
+    case zarr::CodecId::kCrc32c:
+      return {{"name", "crc32c"}};
   }
   return nullptr;
 }
@@ -248,24 +332,26 @@ void write_array(const fs::path& dir, const Volume& v, const ArraySpec& s) {
     std::vector<uint64_t> grid = s.chunks;
     if (!s.shard.empty()) {
       grid = s.shard;
-      codecs = json::array({{{"name", "sharding_indexed"},
-                             {"configuration",
-                              {{"chunk_shape", s.chunks},
-                               {"codecs", inner},
-                               {"index_codecs", json::array({{{"name", "bytes"}, {"configuration", {{"endian", "little"}}}},
-                                                             {{"name", "crc32c"}}})},
-                               {"index_location", s.index_at_start ? "start" : "end"}}}}});
+      codecs = json::array(
+          {{{"name", "sharding_indexed"},
+            {"configuration",
+             {{"chunk_shape", s.chunks},
+              {"codecs", inner},
+              {"index_codecs",
+               json::array({{{"name", "bytes"}, {"configuration", {{"endian", "little"}}}}, {{"name", "crc32c"}}})},
+              {"index_location", s.index_at_start ? "start" : "end"}}}}});
     }
-    json m = {{"zarr_format", 3},
-              {"node_type", "array"},
-              {"shape", v.shape},
-              {"data_type", v3_dtype(v.dtype)},
-              {"chunk_grid", {{"name", "regular"}, {"configuration", {{"chunk_shape", grid}}}}},
-              {"chunk_key_encoding",
-               {{"name", s.v3_v2_keys ? "v2" : "default"}, {"configuration", {{"separator", std::string(1, s.separator)}}}}},
-              {"fill_value", s.fill},
-              {"codecs", codecs},
-              {"attributes", json::object()}};
+    json m = {
+        {"zarr_format", 3},
+        {"node_type", "array"},
+        {"shape", v.shape},
+        {"data_type", v3_dtype(v.dtype)},
+        {"chunk_grid", {{"name", "regular"}, {"configuration", {{"chunk_shape", grid}}}}},
+        {"chunk_key_encoding",
+         {{"name", s.v3_v2_keys ? "v2" : "default"}, {"configuration", {{"separator", std::string(1, s.separator)}}}}},
+        {"fill_value", s.fill},
+        {"codecs", codecs},
+        {"attributes", json::object()}};
     if (!s.dimension_names.empty()) m["dimension_names"] = s.dimension_names;
     write_text(dir / "zarr.json", m.dump());
   }
@@ -356,8 +442,8 @@ void write_ome(const fs::path& dir, int zarr_format, const std::vector<std::stri
 }
 
 // A one-level z,y,x image of `v` with `spec`.
-fs::path write_image(const std::string& name, const Volume& v, const ArraySpec& spec, const std::string& unit = "micrometer",
-                     std::vector<double> scale = {}) {
+fs::path write_image(const std::string& name, const Volume& v, const ArraySpec& spec,
+                     const std::string& unit = "micrometer", std::vector<double> scale = {}) {
   const fs::path dir = scratch(name);
   if (scale.empty()) scale.assign(v.shape.size(), 1.0);
   std::vector<std::string> axes;
@@ -433,8 +519,10 @@ void check_chunks(const ChunkSource& cs, uint32_t level, const Volume& lv, uint3
             for (int64_t x = 0; x < e; ++x) {
               std::array<int64_t, 3> p{x, y, z}, g;
               for (int a = 0; a < 3; ++a)
-                g[a] = std::clamp<int64_t>(int64_t(c[a]) * cs.chunk_size() - cs.apron() + p[a], 0, int64_t(li.dims[a]) - 1);
-              const double got = get_value(lv.dtype, (*ch)->data.data() + ((z * e + y) * e + x) * dtype_bytes(lv.dtype));
+                g[a] = std::clamp<int64_t>(int64_t(c[a]) * cs.chunk_size() - cs.apron() + p[a], 0,
+                                           int64_t(li.dims[a]) - 1);
+              const double got =
+                  get_value(lv.dtype, (*ch)->data.data() + ((z * e + y) * e + x) * dtype_bytes(lv.dtype));
               bad += got != voxel(lv, g[0], g[1], g[2], channel);
               lo = std::min(lo, got), hi = std::max(hi, got);
               ++checked;
@@ -452,7 +540,9 @@ std::unique_ptr<ZarrChunkSource> open_cs(const fs::path& dir, uint32_t chunk_siz
   return std::move(cs).value();
 }
 
-zarr::BytesCodec codec(zarr::CodecId id) { return zarr::BytesCodec{id}; }
+zarr::BytesCodec codec(zarr::CodecId id) {
+  return zarr::BytesCodec{id};
+}
 zarr::BytesCodec blosc(const std::string& cname, int shuffle, uint32_t typesize) {
   zarr::BytesCodec c{zarr::CodecId::kBlosc};
   c.blosc_cname = cname;
@@ -607,8 +697,7 @@ TEST_CASE("zarr: big-endian u16 (v2 '>u2', v3 bytes endian big) and F order read
       s.big_endian = true;
       s.fortran = fortran;
       s.codecs = {codec(zarr::CodecId::kGzip)};
-      const fs::path dir =
-          write_image("bigendian_v" + std::to_string(format) + (fortran ? "_F" : "_C"), v, s);
+      const fs::path dir = write_image("bigendian_v" + std::to_string(format) + (fortran ? "_F" : "_C"), v, s);
       if (format == 2) CHECK(read_text(dir / "0/.zarray").find(">u2") != std::string::npos);
       check_slab(dir, v);
       check_chunks(*open_cs(dir), 0, v);
@@ -631,7 +720,7 @@ TEST_CASE("zarr: dtypes u8 i8 i16 u32 i32 f32 read back exactly") {
     }
 }
 
-TEST_CASE("zarr: a missing chunk reads as fill_value; a truncated chunk is an error naming its key") {
+TEST_CASE("zarr: a missing chunk reads as fill_value, a truncated chunk is an error naming its key") {
   const Volume v0 = make_volume({6, 6, 6}, DType::kU16);
   Volume v = v0;
   ArraySpec s;
@@ -670,7 +759,9 @@ TEST_CASE("zarr: a 3-level multiscale (anisotropic first step) gives levels with
     CAPTURE(format);
     const fs::path dir = scratch("multiscale_v" + std::to_string(format));
     write_ome(dir, format, {"z", "y", "x"}, "micrometer",
-              {{"s0", {2.0, 0.5, 0.5}, {0, 0, 0}}, {"s1", {2.0, 1.0, 1.0}, {0, 0.25, 0.25}}, {"s2", {4.0, 2.0, 2.0}, {1, 0.75, 0.75}}});
+              {{"s0", {2.0, 0.5, 0.5}, {0, 0, 0}},
+               {"s1", {2.0, 1.0, 1.0}, {0, 0.25, 0.25}},
+               {"s2", {4.0, 2.0, 2.0}, {1, 0.75, 0.75}}});
     ArraySpec s;
     s.zarr_format = format;
     s.chunks = {4, 8, 8};
@@ -779,7 +870,10 @@ TEST_CASE("zarr: concurrent chunk reads agree, and the decoded-chunk cache stays
         for (uint32_t i = 0; i < 27; ++i) {
           const uint32_t k = (i + t * 7) % 27;
           auto ch = cs.read({0, k % 3, (k / 3) % 3, k / 9, 0, 0});
-          if (!ch) { ++bad; continue; }
+          if (!ch) {
+            ++bad;
+            continue;
+          }
           // interior voxel (0,0,0) of the chunk
           const uint64_t x = (k % 3) * 8, y = ((k / 3) % 3) * 8, z = (k / 9) * 8;
           if (get_value(DType::kU16, (*ch)->data.data() + ((1 * 10 + 1) * 10 + 1) * 2) != voxel(v, x, y, z)) ++bad;
@@ -806,8 +900,8 @@ TEST_CASE("zarr: concurrent chunk reads agree, and the decoded-chunk cache stays
 TEST_CASE("zarr: Neuroglancer simple_0.4 (v2, blosc-lz4) and simple_0.5 (v3, raw) read as SOURCES.md says") {
   // Level 0 is 10x10 u16 holding 10*y + x (the raw v3 chunk shows it); level 1
   // and 2 values as stored (5x5, 2x2). Scales [4,30] nm (y,x), 2x and 4x.
-  const std::vector<double> level1 = {2, 3, 6, 7, 9, 20, 21, 23, 25, 26, 39, 41, 43, 45, 47,
-                                      59, 61, 63, 65, 67, 79, 81, 82, 85, 86};
+  const std::vector<double> level1 = {2,  3,  6,  7,  9,  20, 21, 23, 25, 26, 39, 41, 43,
+                                      45, 47, 59, 61, 63, 65, 67, 79, 81, 82, 85, 86};
   const std::vector<double> level2 = {5, 8, 39, 42};
   for (const char* name : {"simple_0.4", "simple_0.5"}) {
     CAPTURE(name);
@@ -848,36 +942,72 @@ TEST_CASE("zarr: malformed metadata gives one line naming the file and the key")
     int format;
     const char* file;  // relative to the image folder
     std::function<void(json&)> edit;
-    const char* key;   // what the message must name
+    const char* key;  // what the message must name
   };
   const std::vector<Case> cases = {
-      {2, "0/.zarray", [](json& j) { j["chunks"] = {4, 0, 4}; }, "'chunks' must be a list of 3 positive integers"},
+      {2, "0/.zarray",
+       [](json& j) {
+         j["chunks"] = {4, 0, 4};
+       },
+       "'chunks' must be a list of 3 positive integers"},
       {2, "0/.zarray", [](json& j) { j["chunks"] = "big"; }, "'chunks'"},
       {2, "0/.zarray", [](json& j) { j["shape"] = {4}; }, "'shape' must be a list of 2..5"},
       {2, "0/.zarray", [](json& j) { j["dtype"] = "<f8"; }, "'dtype' '<f8' is not read"},
       {2, "0/.zarray", [](json& j) { j["dtype"] = 7; }, "'dtype' must be"},
-      {2, "0/.zarray", [](json& j) { j["compressor"] = {{"id", "lzma"}}; }, "'compressor': unknown id 'lzma'"},
+      {2, "0/.zarray",
+       [](json& j) {
+         j["compressor"] = {{"id", "lzma"}};
+       },
+       "'compressor': unknown id 'lzma'"},
       {2, "0/.zarray", [](json& j) { j["order"] = "K"; }, "'order'"},
       {2, "0/.zarray", [](json& j) { j["fill_value"] = 300; }, "'fill_value'"},
-      {2, "0/.zarray", [](json& j) { j["filters"] = json::array({{{"id", "delta"}}}); }, "'filters'"},
+      {2, "0/.zarray",
+       [](json& j) {
+         j["filters"] = json::array({{{"id", "delta"}}});
+       },
+       "'filters'"},
       {2, "0/.zarray", [](json& j) { j["dimension_separator"] = "-"; }, "'dimension_separator'"},
       {2, ".zattrs", [](json& j) { j["multiscales"][0].erase("datasets"); }, "'datasets'"},
       {2, ".zattrs", [](json& j) { j["multiscales"][0]["axes"].erase(0); }, "'axes' must be a list of 3 axes"},
-      {2, ".zattrs", [](json& j) { j["multiscales"][0]["datasets"][0]["coordinateTransformations"][0]["scale"] = {1, 1}; },
+      {2, ".zattrs",
+       [](json& j) {
+         j["multiscales"][0]["datasets"][0]["coordinateTransformations"][0]["scale"] = {1, 1};
+       },
        "'coordinateTransformations'[0]: 'scale' must be a list of 3 numbers"},
       {2, ".zattrs", [](json& j) { j["multiscales"][0]["datasets"][0]["path"] = 5; }, "'datasets'[0] must have"},
       {2, ".zattrs", [](json& j) { j.erase("multiscales"); }, "no 'multiscales'"},
-      {2, ".zattrs", [](json& j) { j["multiscales"][0]["axes"][0]["type"] = "time"; j["multiscales"][0]["axes"][1]["type"] = "time"; },
+      {2, ".zattrs",
+       [](json& j) {
+         j["multiscales"][0]["axes"][0]["type"] = "time";
+         j["multiscales"][0]["axes"][1]["type"] = "time";
+       },
        "more than one time axis"},
-      {3, "0/zarr.json", [](json& j) { j["codecs"][1] = {{"name", "foo"}}; }, "'codecs'[1]: codec 'foo' is not read"},
+      {3, "0/zarr.json",
+       [](json& j) {
+         j["codecs"][1] = {{"name", "foo"}};
+       },
+       "'codecs'[1]: codec 'foo' is not read"},
       {3, "0/zarr.json", [](json& j) { j["data_type"] = "float64"; }, "'data_type' 'float64'"},
       {3, "0/zarr.json", [](json& j) { j["chunk_grid"]["name"] = "irregular"; }, "'chunk_grid'"},
-      {3, "0/zarr.json", [](json& j) { j["chunk_grid"]["configuration"]["chunk_shape"] = {4, 4}; }, "'chunk_grid': 'chunk_shape'"},
+      {3, "0/zarr.json",
+       [](json& j) {
+         j["chunk_grid"]["configuration"]["chunk_shape"] = {4, 4};
+       },
+       "'chunk_grid': 'chunk_shape'"},
       {3, "0/zarr.json", [](json& j) { j["chunk_key_encoding"]["name"] = "odd"; }, "'chunk_key_encoding'"},
       {3, "0/zarr.json", [](json& j) { j.erase("fill_value"); }, "'fill_value' is missing"},
-      {3, "zarr.json", [](json& j) { j["attributes"]["ome"]["multiscales"] = json::object(); }, "'multiscales' must be a non-empty list"},
-      {3, "0/zarr.json", [](json& j) { j["shape"] = {4, 4, uint64_t(1) << 41}; }, "'shape' has a side over 2^40"},
-      {2, "0/.zarray", [](json& j) { j["shape"] = {4, 4, -4}; }, "'shape' must be a list of 2..5 non-negative integers"},
+      {3, "zarr.json", [](json& j) { j["attributes"]["ome"]["multiscales"] = json::object(); },
+       "'multiscales' must be a non-empty list"},
+      {3, "0/zarr.json",
+       [](json& j) {
+         j["shape"] = {4, 4, uint64_t(1) << 41};
+       },
+       "'shape' has a side over 2^40"},
+      {2, "0/.zarray",
+       [](json& j) {
+         j["shape"] = {4, 4, -4};
+       },
+       "'shape' must be a list of 2..5 non-negative integers"},
   };
   int i = 0;
   for (const Case& c : cases) {
@@ -917,6 +1047,10 @@ TEST_CASE("zarr: a bare Zarr array and a bioformats2raw folder open without OME 
   check_slab(bare, v);
   check_chunks(*open_cs(bare), 0, v);
 
+  auto bare_src = open_import_source({bare.string()});
+  REQUIRE(bare_src.is_ok());
+  CHECK((*bare_src)->files() == std::vector<std::string>{(bare / ".zarray").string()});
+
   const fs::path b2r = scratch("b2r.zarr");
   write_text(b2r / ".zgroup", R"({"zarr_format": 2})");
   write_text(b2r / ".zattrs", R"({"bioformats2raw.layout": 3})");
@@ -944,7 +1078,8 @@ TEST_CASE("zarr: slice-shaped chunks (1 x 64 x 64) are decoded once each when th
   CHECK(a.decodes() == 20);
 }
 
-TEST_CASE("zarr: damaged copies (flipped bytes, truncation) of blosc, gzip and sharded fixtures fail cleanly, never crash") {
+TEST_CASE(
+    "zarr: damaged copies (flipped bytes, truncation) of blosc, gzip and sharded fixtures fail cleanly, never crash") {
   // Each damaged copy either still reads (a flip the format cannot notice,
   // e.g. inside raw voxels) or fails with a one-line message; a crash fails
   // the whole test binary.
@@ -981,8 +1116,10 @@ TEST_CASE("zarr: damaged copies (flipped bytes, truncation) of blosc, gzip and s
       const fs::path victim = dir / files[next() % files.size()];
       std::string bytes = read_text(victim);
       if (bytes.empty()) continue;
-      if (iter % 3 == 0) bytes.resize(next() % bytes.size());
-      else for (int k = 0; k < 1 + int(next() % 4); ++k) bytes[next() % bytes.size()] ^= char(1 + next() % 255);
+      if (iter % 3 == 0)
+        bytes.resize(next() % bytes.size());
+      else
+        for (int k = 0; k < 1 + int(next() % 4); ++k) bytes[next() % bytes.size()] ^= char(1 + next() % 255);
       write_text(victim, bytes);
       CAPTURE(victim.string());
       auto cs = ZarrChunkSource::open(dir.string(), 8, 1);

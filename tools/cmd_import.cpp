@@ -82,6 +82,7 @@ int run_import(const ImportArgs& a) {
   if (!mem || *mem < (uint64_t(16) << 20))
     return fail(invalid_argument("--memory '" + a.memory + "': give a size of at least 16M, e.g. 512M or 2G"), kExitUsage);
   opt.memory_bytes = *mem;
+  hints.memory_bytes = *mem;  // readers size their buffers against it too
   if (a.downsample == "max") opt.downsample = vxc::Downsample::kMax;
   else if (a.downsample != "mean")
     return fail(invalid_argument("--downsample '" + a.downsample + "': use mean or max"), kExitUsage);
@@ -118,6 +119,16 @@ int run_import(const ImportArgs& a) {
 }
 
 }  // namespace
+
+int import_volume(const std::vector<std::string>& inputs, const std::string& output, const std::string& voxel_size,
+                  const std::string& unit) {
+  ImportArgs a;
+  a.inputs = inputs;
+  a.output = output;
+  a.voxel_size = voxel_size;
+  a.unit = unit;
+  return run_import(a);
+}
 
 void add_import_command(CLI::App& app, Invocation& inv) {
   auto args = std::make_shared<ImportArgs>();

@@ -5,6 +5,11 @@
 // "render" and "camera"), then the flags override them. Without a window the
 // 0.5..99.5 percentiles of each channel are used. Bad settings exit 2 with one
 // line naming the setting.
+//
+// Cards: --save-card STORE stores the picture as a card whose Scene holds every
+// resolved choice (input, timepoint, channels, windows, camera, size,
+// renderer); --card STORE:ID starts from that Scene, so the same build draws
+// the same pixels again.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,6 +19,8 @@
 #include <functional>
 #include <sstream>
 
+#include "annotate/annotation_store.h"
+#include "annotate/file_io.h"
 #include "command.h"
 #include "core/output_file.h"
 #include "core/trace.h"
@@ -35,11 +42,25 @@ namespace {
 struct Options {
   std::string input, output, settings_path, camera, size = "512x512", model, colormap, window, path = "compute";
   std::string renderer;  // "" = lod for chunk sources (.vxc, OME-Zarr) and procedural: inputs, dense otherwise
+  std::string channel;   // "" = the first (up to 4) channels; else a comma list of channel indices
+  uint32_t timepoint = 0;
   double fov = 0.0, step = 0.0, reference_step = 1.0 / 16.0;
   double lod_bias = 0.0, frame_budget_ms = 0.0;
   bool lod_bias_given = false;
   int frames = 0;  // 0: until converged (lod) / one frame (dense)
   bool reference = false, stats = false;
+  bool size_given = false, timepoint_given = false, path_given = false;
+  std::string card;       // STORE:ID to restore
+  std::string save_card;  // STORE to add a card to
+  std::string card_title, card_note;
+};
+
+// What the render resolved, for --save-card.
+struct Resolved {
+  std::string renderer;
+  std::vector<uint32_t> channels;
+  RenderSettings settings;
+  Camera camera;
 };
 
 bool starts_with(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
@@ -73,6 +94,54 @@ std::pair<double, double> auto_window(const DenseVolume& v) {
   return {lo, hi};
 }
 
+// --channel "2" or "0,2": the volume's channels to draw (at most 4, each once).
+Result<std::vector<uint32_t>> parse_channels(const std::string& text, uint32_t volume_channels) {
+  std::vector<uint32_t> out;
+  if (text.empty()) {
+    for (uint32_t c = 0; c < std::min<uint32_t>(volume_channels, VXR_MAX_CHANNELS); ++c) out.push_back(c);
+    return out;
+  }
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    char* end = nullptr;
+    const unsigned long c = std::strtoul(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || c >= volume_channels)
+      return invalid_argument("--channel: '" + item + "' is not a channel of this volume (0.." +
+                              std::to_string(volume_channels - 1) + ")");
+    if (std::find(out.begin(), out.end(), uint32_t(c)) != out.end())
+      return invalid_argument("--channel: channel " + item + " is named twice");
+    out.push_back(uint32_t(c));
+  }
+  if (out.size() > VXR_MAX_CHANNELS)
+    return invalid_argument("--channel: at most " + std::to_string(VXR_MAX_CHANNELS) + " channels are drawn together");
+  return out;
+}
+
+// Channels without settings get their own: single-hue colours (a copy of
+// channel 0's settings otherwise, window included); windows from
+// `auto_window_of(c)` unless --window/--settings gave one. The same rule for
+// both renderers.
+void complete_channel_settings(RenderSettings& s, size_t n, bool window_given, bool colormap_given,
+                               const std::function<std::pair<double, double>(size_t)>& auto_window_of) {
+  const char* hues[4] = {"green", "magenta", "cyan", "yellow"};
+  for (size_t c = s.channels.size(); c < n; ++c) {
+    ChannelSettings ch = s.channels[0];
+    ch.colormap = n > 1 ? hues[c] : ch.colormap;
+    ch.color_points.clear();
+    s.channels.push_back(ch);
+  }
+  if (s.channels.size() > n) s.channels.resize(n);
+  if (n > 1 && !colormap_given && s.channels[0].colormap == "gray") s.channels[0].colormap = hues[0];
+  for (size_t c = 0; c < n && !window_given; ++c) {
+    auto [lo, hi] = auto_window_of(c);
+    s.channels[c].window_lo = lo;
+    s.channels[c].window_hi = hi;
+  }
+  if (s.iso_value == RenderSettings{}.iso_value && !window_given)
+    s.iso_value = 0.5 * (s.channels[0].window_lo + s.channels[0].window_hi);
+}
+
 Result<std::string> read_text(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) return not_found(path + ": cannot open the settings file");
@@ -89,7 +158,7 @@ using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 // renders --frames frames (default 30) letting the frame-budget controller set
 // the LOD bias, and writes the last.
 int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context& gpu, bool procedural, uint32_t width,
-            uint32_t height, const CameraMaker& make_camera) {
+            uint32_t height, const CameraMaker& make_camera, Resolved* resolved) {
   std::unique_ptr<ChunkSource> src;
   if (procedural) {
     auto p = open_procedural(o.input);
@@ -107,35 +176,43 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
     src = std::move(r->source);
   }
   const VolumeInfo& info = src->info();
-  if (info.dtype != DType::kU8 && info.dtype != DType::kU16)
-    return fail(invalid_argument(o.input + ": the out-of-core renderer draws u8 or u16 data, this is " +
-                                 dtype_name(info.dtype) + "; use --renderer dense"),
+  auto drawn = parse_channels(o.channel, info.channels);
+  if (!drawn) return fail(drawn.status(), kExitUsage);
+  if (o.timepoint >= info.timepoints)
+    return fail(invalid_argument("--timepoint: " + std::to_string(o.timepoint) + ", but " + o.input + " has " +
+                                 std::to_string(info.timepoints) + " timepoint(s) (0.." +
+                                 std::to_string(info.timepoints - 1) + ")"),
                 kExitUsage);
-  if (info.channels > 1 || info.timepoints > 1)
-    std::fprintf(stderr, "vxr: note: %s: the out-of-core renderer draws channel 0 of timepoint 0 (of %u channels, %u "
-                         "timepoints); --renderer dense draws all channels\n",
-                 o.input.c_str(), info.channels, info.timepoints);
-  if (!window_given) {
-    // Percentiles of a level small enough to read whole (~2 M voxels).
-    const uint32_t level = finest_level_that_fits(*src, 4096, uint64_t(2) << 20);
-    auto dense = read_level_dense(*src, level, 0, 0, uint64_t(64) << 20);
-    if (!dense) return fail(dense.status());
-    auto [lo, hi] = auto_window(*dense);
-    s.channels[0].window_lo = lo;
-    s.channels[0].window_hi = hi;
-  }
-  if (Status st = validate_render_settings(s, 1); !st) return fail(st, kExitUsage);
-  if (Status st = check_brick_settings(s); !st) return fail(st, kExitUsage);
+  if (info.channels > VXR_MAX_CHANNELS && o.channel.empty())
+    std::fprintf(stderr, "vxr: note: %s has %u channels; drawing 0..%d (choose with --channel)\n", o.input.c_str(),
+                 info.channels, VXR_MAX_CHANNELS - 1);
+  // Percentiles of a level small enough to read whole (~2 M voxels).
+  const uint32_t window_level = finest_level_that_fits(*src, 4096, uint64_t(2) << 20);
+  Status window_error = Status::ok();
+  complete_channel_settings(s, drawn->size(), window_given, !o.colormap.empty(), [&](size_t c) {
+    auto dense = read_level_dense(*src, window_level, (*drawn)[c], o.timepoint, uint64_t(64) << 20);
+    if (!dense) {
+      window_error = dense.status();
+      return std::pair<double, double>(0.0, 1.0);
+    }
+    return auto_window(*dense);
+  });
+  if (!window_error) return fail(window_error);
+  if (Status st = check_brick_settings(s, static_cast<uint32_t>(drawn->size())); !st) return fail(st, kExitUsage);
 
-  auto renderer = BrickRenderer::create(gpu, *src);
+  BrickRendererOptions ro;
+  ro.pool.channels = *drawn;
+  auto renderer = BrickRenderer::create(gpu, *src, ro);
   if (!renderer) return fail(renderer.status());
   BrickRenderer& r = **renderer;
   const VolumePlacement placement = r.placement();
   Camera camera;
   if (int rc = make_camera(placement, info.dims[2] == 1, &camera); rc != kExitOk) return rc;
+  *resolved = {"lod", *drawn, s, camera};
 
   BrickFrameSettings frame;
   frame.lod.lod_bias = o.lod_bias;
+  frame.lod.timepoint = o.timepoint;
   const bool budget = o.frame_budget_ms > 0.0;
   FrameBudget controller;
   controller.target_ms = o.frame_budget_ms;
@@ -190,8 +267,92 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   return kExitOk;
 }
 
-int run(const Options& o) {
+// "STORE:ID" (the store path may itself hold colons: the id follows the last).
+Result<Scene> load_card_scene(const std::string& spec) {
+  const size_t colon = spec.rfind(':');
+  char* end = nullptr;
+  const std::string id_text = colon == std::string::npos ? "" : spec.substr(colon + 1);
+  const unsigned long long id = std::strtoull(id_text.c_str(), &end, 10);
+  if (colon == std::string::npos || colon == 0 || id_text.empty() || *end != '\0' || id == 0)
+    return invalid_argument("--card '" + spec + "': give STORE:ID, e.g. brain.vxr/annotations:3");
+  const std::string store_path = spec.substr(0, colon);
+  VXR_ASSIGN_OR_RETURN(auto store, annotate::AnnotationStore::open(store_path, /*create=*/false));
+  VXR_ASSIGN_OR_RETURN(annotate::Card card, store->card(id, /*with_media=*/false));
+  if (card.scene_json.empty())
+    return invalid_argument(store_path + ": card " + id_text + " was stored without a scene; there is no view to restore");
+  auto scene = scene_from_json(card.scene_json);
+  if (!scene) return invalid_argument(store_path + ": card " + id_text + ": " + scene.status().message());
+  return scene;
+}
+
+// Adds the picture just written as a card whose Scene is what this run
+// resolved, so `--card` draws it again without guessing anything.
+int save_card(const Options& o, Scene sc, const Resolved& r, uint32_t width, uint32_t height) {
+  std::error_code ec;
+  sc.volume = starts_with(o.input, "procedural:") ? o.input : std::filesystem::absolute(o.input, ec).lexically_normal().string();
+  sc.timepoint = o.timepoint;
+  sc.channels = r.channels;
+  sc.has_camera = true;
+  sc.camera = {{r.camera.eye.x, r.camera.eye.y, r.camera.eye.z},
+               {r.camera.target.x, r.camera.target.y, r.camera.target.z},
+               {r.camera.up.x, r.camera.up.y, r.camera.up.z},
+               r.camera.fov_y_deg};
+  sc.viewport = {width, height};
+  sc.renderer = r.renderer;
+  sc.path = r.renderer == "dense" ? o.path : "";
+  sc.lod_bias = r.renderer == "lod" ? o.lod_bias : 0.0;
+  sc.render = r.settings;
+  auto png = annotate::read_whole_file(o.output);
+  if (!png) return fail(png.status());
+  annotate::Card card;
+  card.title = o.card_title;
+  card.note = o.card_note;
+  card.scene_json = scene_to_json(sc);
+  card.snapshot_png.assign(png->begin(), png->end());
+  auto store = annotate::AnnotationStore::open(o.save_card, /*create=*/false);
+  if (!store) return fail(store.status());
+  auto id = (*store)->add_card(std::move(card));
+  if (!id) return fail(id.status());
+  std::printf("card %llu in %s\n", (unsigned long long)*id, o.save_card.c_str());
+  return kExitOk;
+}
+
+int run(const Options& given) {
   VXR_TRACE_SCOPE("render");
+  Options o = given;
+  // A card (or a Scene given with --settings) supplies the choices the flags
+  // did not make; a flag given on the command line wins.
+  Scene scene;
+  bool window_given = false;
+  auto adopt_scene_choices = [&](const Scene& sc) {
+    if (o.input.empty()) o.input = sc.volume;
+    if (!o.timepoint_given) o.timepoint = sc.timepoint;
+    if (o.channel.empty() && !sc.channels.empty()) {
+      for (size_t i = 0; i < sc.channels.size(); ++i) o.channel += (i ? "," : "") + std::to_string(sc.channels[i]);
+    }
+    if (!o.size_given && sc.viewport[0] > 0)
+      o.size = std::to_string(sc.viewport[0]) + "x" + std::to_string(sc.viewport[1]);
+    if (o.renderer.empty()) o.renderer = sc.renderer;
+    if (!o.path_given && !sc.path.empty()) o.path = sc.path;
+    if (!o.lod_bias_given && sc.lod_bias != 0.0) o.lod_bias = sc.lod_bias, o.lod_bias_given = true;
+  };
+  if (!o.card.empty()) {
+    if (!o.settings_path.empty()) return fail(invalid_argument("give --card or --settings, not both"), kExitUsage);
+    auto sc = load_card_scene(o.card);
+    if (!sc) {
+      const ErrorCode c = sc.status().code();
+      return fail(sc.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage : kExitFailure);
+    }
+    scene = *sc;
+    window_given = true;  // a card holds resolved windows
+    adopt_scene_choices(scene);
+  }
+  if (o.input.empty())
+    return fail(invalid_argument("give the volume to render (vxr render INPUT -o out.png), or --card STORE:ID"), kExitUsage);
+  if (!o.save_card.empty() && (o.reference || o.frame_budget_ms != 0.0))
+    return fail(invalid_argument(std::string("--save-card: a card restores through the GPU renderer to the same pixels; ") +
+                                 (o.reference ? "drop --reference" : "drop --frame-budget-ms (its picture depends on timing)")),
+                kExitUsage);
   if (!starts_with(o.input, "procedural:")) {
     if (Status st = check_input(o.input, /*allow_dir=*/true); !st) return fail(st);
   }
@@ -200,8 +361,6 @@ int run(const Options& o) {
     if (Status st = check_input(o.settings_path); !st) return fail(st, kExitUsage);
   }
   // Settings first: a bad setting is a usage error even before any file is read.
-  Scene scene;
-  bool window_given = false;
   if (!o.settings_path.empty()) {
     auto text = read_text(o.settings_path);
     if (!text) return fail(text.status(), kExitUsage);
@@ -212,6 +371,7 @@ int run(const Options& o) {
       auto sc = scene_from_json(*text);
       if (!sc) return fail(invalid_argument(o.settings_path + ": " + sc.status().message()), kExitUsage);
       scene = *sc;
+      adopt_scene_choices(scene);
     } else {
       auto rs = render_settings_from_json(*text);
       if (!rs) return fail(invalid_argument(o.settings_path + ": " + rs.status().message()), kExitUsage);
@@ -272,6 +432,10 @@ int run(const Options& o) {
   // The reference marches every sample in double on the CPU: below 1/256 voxel it would run for days.
   if (o.reference && !(o.reference_step >= 1.0 / 256 && o.reference_step <= 64.0))
     return fail(invalid_argument("--reference-step: must be within 1/256..64 voxels (default 1/16)"), kExitUsage);
+  if (renderer == "dense" && o.timepoint != 0)
+    return fail(invalid_argument("--timepoint: the dense renderer loads timepoint 0 only; draw other timepoints "
+                                 "out of core (a .vxc from `vxr import`, or OME-Zarr; --renderer lod)"),
+                kExitUsage);
   if (!std::isfinite(o.lod_bias) || std::abs(o.lod_bias) > 16.0)
     return fail(invalid_argument("--lod-bias: must be within -16..16 (log2 of voxels per pixel)"), kExitUsage);
 
@@ -284,6 +448,8 @@ int run(const Options& o) {
     max_dim = std::min(max_dim, gpu->limits().maxImageDimension3D);
   }
 
+  Camera world_camera;  // before the volume transform: what a card stores
+  Resolved resolved;
   // The camera: the default orbit view, then the scene's, then the flags.
   auto make_camera = [&](const VolumePlacement& placement, bool flat, Camera* out) -> int {
     Camera camera = flat ? orbit_camera(placement, 0.0, 90.0 - 1e-3, 1.1) : orbit_camera(placement, 30.0, 25.0, 1.25);
@@ -309,40 +475,53 @@ int run(const Options& o) {
     }
     if (glm::length(camera.target - camera.eye) == 0.0)
       return fail(invalid_argument("--camera: the eye and the target are the same point"), kExitUsage);
+    world_camera = camera;
+    // The renderers draw the volume at the origin: a moved, turned or scaled
+    // volume is drawn by moving the camera the opposite way.
+    if (!(scene.transform == VolumeTransform{})) {
+      const CameraState v = camera_in_volume_frame({{camera.eye.x, camera.eye.y, camera.eye.z},
+                                                    {camera.target.x, camera.target.y, camera.target.z},
+                                                    {camera.up.x, camera.up.y, camera.up.z},
+                                                    camera.fov_y_deg},
+                                                   scene.transform);
+      camera.eye = {v.eye[0], v.eye[1], v.eye[2]};
+      camera.target = {v.target[0], v.target[1], v.target[2]};
+      camera.up = {v.up[0], v.up[1], v.up[2]};
+    }
     *out = camera;
     return kExitOk;
   };
+  auto finish = [&](int rc) {
+    if (rc != kExitOk || o.save_card.empty()) return rc;
+    resolved.camera = world_camera;
+    return save_card(o, scene, resolved, width, height);
+  };
 
-  if (renderer == "lod") return run_lod(o, s, window_given, *gpu, procedural, width, height, make_camera);
+  if (renderer == "lod") return finish(run_lod(o, s, window_given, *gpu, procedural, width, height, make_camera, &resolved));
 
   auto loaded = load_for_render(o.input, max_dim, uint64_t(1) << 30);
   if (!loaded) return fail(loaded.status());
   for (const auto& note : loaded->notes) std::fprintf(stderr, "vxr: note: %s\n", note.c_str());
   std::vector<DenseVolume>& channels = loaded->channels;
-
-  // Channels without settings get their own: single-hue colours, auto windows.
-  const char* hues[4] = {"green", "magenta", "cyan", "yellow"};
-  for (size_t c = s.channels.size(); c < channels.size(); ++c) {
-    ChannelSettings ch = s.channels[0];
-    ch.colormap = channels.size() > 1 ? hues[c] : ch.colormap;
-    ch.color_points.clear();
-    s.channels.push_back(ch);
-  }
-  if (channels.size() > 1 && o.colormap.empty() && s.channels[0].colormap == "gray") s.channels[0].colormap = hues[0];
-  for (size_t c = 0; c < channels.size(); ++c)
-    if (!window_given || c > 0) {
-      auto [lo, hi] = auto_window(channels[c]);
-      if (c > 0 && window_given) continue;
-      s.channels[c].window_lo = lo;
-      s.channels[c].window_hi = hi;
+  std::vector<uint32_t> drawn_channels;
+  {
+    auto drawn = parse_channels(o.channel, static_cast<uint32_t>(channels.size()));
+    if (!drawn) return fail(drawn.status(), kExitUsage);
+    drawn_channels = *drawn;
+    if (!o.channel.empty()) {
+      std::vector<DenseVolume> picked;
+      for (uint32_t c : *drawn) picked.push_back(std::move(channels[c]));
+      channels = std::move(picked);
     }
-  if (s.iso_value == RenderSettings{}.iso_value && !window_given)
-    s.iso_value = 0.5 * (s.channels[0].window_lo + s.channels[0].window_hi);
+  }
+  complete_channel_settings(s, channels.size(), window_given, !o.colormap.empty(),
+                            [&](size_t c) { return auto_window(channels[c]); });
   if (Status st = validate_render_settings(s, static_cast<uint32_t>(channels.size())); !st) return fail(st, kExitUsage);
 
   const VolumePlacement placement{channels[0].dims, channels[0].voxel_size};
   Camera camera;
   if (int rc = make_camera(placement, channels[0].dims[2] == 1, &camera); rc != kExitOk) return rc;
+  resolved = {"dense", drawn_channels, s, camera};
 
   const auto t0 = std::chrono::steady_clock::now();
   Result<ImageRgbaF> image = invalid_argument("unset");
@@ -367,7 +546,7 @@ int run(const Options& o) {
     std::printf("stats: renderer dense, shrink %u, samples <= %llu (before early termination), %.1f ms\n",
                 loaded->shrink, (unsigned long long)n, ms);
   }
-  return kExitOk;
+  return finish(kExitOk);
 }
 
 }  // namespace
@@ -375,7 +554,7 @@ int run(const Options& o) {
 void add_render_command(CLI::App& app, Invocation& inv) {
   auto o = std::make_shared<Options>();
   auto* cmd = app.add_subcommand("render", "render one picture of a volume (.vxc, OME-Zarr, TIFF, OME-TIFF, slices, .ims, raw+JSON, procedural:vessels:SIDE) to PNG");
-  cmd->add_option("input", o->input, "the volume")->required();
+  cmd->add_option("input", o->input, "the volume (optional with --card: the card's volume)");
   cmd->add_option("-o,--out", o->output, "output PNG")->required();
   cmd->add_option("--settings", o->settings_path, "render settings JSON (RenderSettings, or a Scene with render+camera)");
   cmd->add_option("--camera", o->camera, "px,py,pz,tx,ty,tz,ux,uy,uz: eye, target, up in world units (volume centred at 0)");
@@ -385,6 +564,8 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--colormap", o->colormap, "gray, viridis, magma, inferno, plasma, turbo, hot, red, green, blue, cyan, magenta, yellow");
   cmd->add_option("--window", o->window, "lo,hi in data units (default: 0.5..99.5 percentiles)");
   cmd->add_option("--step", o->step, "sample step in voxels");
+  cmd->add_option("--channel", o->channel, "channels to draw, e.g. 2 or 0,2 (default: the first up to 4)");
+  cmd->add_option("--timepoint", o->timepoint, "timepoint to draw (default 0; out-of-core renderer)");
   cmd->add_option("--path", o->path, "compute (default) or fragment");
   cmd->add_option("--renderer", o->renderer,
                   "lod (out-of-core bricks; default for .vxc, OME-Zarr and procedural:vessels:SIDE) or dense (whole volume)");
@@ -395,8 +576,15 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_flag("--stats", o->stats, "print the final frame's statistics (bricks, samples, uploads, cache hits)");
   cmd->add_flag("--reference", o->reference, "render with the CPU reference renderer (double precision, slow)");
   cmd->add_option("--reference-step", o->reference_step, "the reference's step in voxels (default 1/16)");
+  cmd->add_option("--card", o->card, "STORE:ID: restore a card's scene (volume, camera, settings, size); flags override");
+  cmd->add_option("--save-card", o->save_card, "STORE: also store the picture as a card with the full scene to restore it");
+  cmd->add_option("--card-title", o->card_title, "with --save-card: the card's title");
+  cmd->add_option("--card-note", o->card_note, "with --save-card: the card's note");
   cmd->callback([&inv, o, cmd] {
     o->lod_bias_given = cmd->count("--lod-bias") > 0;
+    o->size_given = cmd->count("--size") > 0;
+    o->timepoint_given = cmd->count("--timepoint") > 0;
+    o->path_given = cmd->count("--path") > 0;
     inv.run = [o] { return run(*o); };
   });
 }

@@ -33,6 +33,13 @@ void add_verify_command(CLI::App& app, Invocation& inv);
 void add_export_tiff_command(CLI::App& app, Invocation& inv);
 void add_annotate_command(CLI::App& app, Invocation& inv);
 void add_cards_command(CLI::App& app, Invocation& inv);
+void add_project_command(CLI::App& app, Invocation& inv);
+void add_catalog_command(CLI::App& app, Invocation& inv);
+
+// `vxr import INPUTS -o OUTPUT` with the default options (what `vxr project
+// create` runs); prints as `vxr import` does and returns its exit code.
+int import_volume(const std::vector<std::string>& inputs, const std::string& output, const std::string& voxel_size,
+                  const std::string& unit);
 
 // Opens the Vulkan device (VXR_DEVICE, VXR_VALIDATION from the environment).
 Result<std::unique_ptr<gpu::Context>> open_gpu();

@@ -25,22 +25,44 @@ std::string hex16(uint64_t v) {
   std::snprintf(buf, sizeof buf, "%016" PRIx64, v);
   return buf;
 }
-Id parse_hex16(const std::string& s) { return std::strtoull(s.c_str(), nullptr, 16); }
+Id parse_hex16(const std::string& s) {
+  return std::strtoull(s.c_str(), nullptr, 16);
+}
 
 const std::string kSchemaKey = "meta/schema_version";
 const std::string kSpaceKey = "meta/voxel_space";
 const std::string kNextPrefix = "meta/next/";
-std::string marker_key(Id id) { return "marker/" + hex16(id); }
-std::string measure_key(Id id) { return "measure/" + hex16(id); }
-std::string skeleton_key(Id id) { return "skeleton/" + hex16(id); }
-std::string node_prefix(Id sk) { return "node/" + hex16(sk) + "/"; }
-std::string node_key(Id sk, int64_t node) { return node_prefix(sk) + hex16(static_cast<uint64_t>(node)); }
-std::string track_key(Id id) { return "track/" + hex16(id); }
-std::string roi_key(Id id) { return "roi/" + hex16(id); }
-std::string card_key(Id id) { return "card/" + hex16(id); }
-std::string blob_key(Id id, const char* what) { return "blob/" + hex16(id) + "/" + what; }
+std::string marker_key(Id id) {
+  return "marker/" + hex16(id);
+}
+std::string measure_key(Id id) {
+  return "measure/" + hex16(id);
+}
+std::string skeleton_key(Id id) {
+  return "skeleton/" + hex16(id);
+}
+std::string node_prefix(Id sk) {
+  return "node/" + hex16(sk) + "/";
+}
+std::string node_key(Id sk, int64_t node) {
+  return node_prefix(sk) + hex16(static_cast<uint64_t>(node));
+}
+std::string track_key(Id id) {
+  return "track/" + hex16(id);
+}
+std::string roi_key(Id id) {
+  return "roi/" + hex16(id);
+}
+std::string card_key(Id id) {
+  return "card/" + hex16(id);
+}
+std::string blob_key(Id id, const char* what) {
+  return "blob/" + hex16(id) + "/" + what;
+}
 
-json vec(const Vec3& v) { return json::array({v[0], v[1], v[2]}); }
+json vec(const Vec3& v) {
+  return json::array({v[0], v[1], v[2]});
+}
 
 // Value decoding: a wrong shape is corruption of the store, named by key.
 struct BadValue {
@@ -76,10 +98,18 @@ json node_json(const SkeletonNode& n) {
 SkeletonNode node_from(int64_t id, const json& j) {
   return {id, get_vec3(j, "pos"), j.at("r").get<double>(), j.at("type").get<int>(), j.at("parent").get<int64_t>()};
 }
-json roi_json(const Roi& r) { return {{"name", r.name}, {"min", vec(r.min)}, {"max", vec(r.max)}}; }
-Roi roi_from(Id id, const json& j) { return {id, j.at("name").get<std::string>(), get_vec3(j, "min"), get_vec3(j, "max")}; }
-json track_json(const Track& t) { return {{"name", t.name}, {"markers", t.markers}}; }
-Track track_from(Id id, const json& j) { return {id, j.at("name").get<std::string>(), j.at("markers").get<std::vector<Id>>()}; }
+json roi_json(const Roi& r) {
+  return {{"name", r.name}, {"min", vec(r.min)}, {"max", vec(r.max)}};
+}
+Roi roi_from(Id id, const json& j) {
+  return {id, j.at("name").get<std::string>(), get_vec3(j, "min"), get_vec3(j, "max")};
+}
+json track_json(const Track& t) {
+  return {{"name", t.name}, {"markers", t.markers}};
+}
+Track track_from(Id id, const json& j) {
+  return {id, j.at("name").get<std::string>(), j.at("markers").get<std::vector<Id>>()};
+}
 json card_json(const Card& c) {
   return {{"title", c.title},
           {"note", c.note},
@@ -97,7 +127,8 @@ Result<T> decode(const std::string& store, const std::string& key, const std::st
   } catch (const BadValue& e) {
     return corrupt(store + ": key " + key + ": " + e.what + "; the store is damaged (restore it from a backup)");
   } catch (const json::exception& e) {
-    return corrupt(store + ": key " + key + ": unreadable value (" + e.what() + "); the store is damaged (restore it from a backup)");
+    return corrupt(store + ": key " + key + ": unreadable value (" + e.what() +
+                   "); the store is damaged (restore it from a backup)");
   }
 }
 
@@ -111,7 +142,8 @@ bool is_png(const std::vector<uint8_t>& b) {
   return b.size() >= 8 && std::equal(sig, sig + 8, b.begin());
 }
 bool is_wav(const std::vector<uint8_t>& b) {
-  return b.size() >= 12 && std::equal(b.begin(), b.begin() + 4, "RIFF") && std::equal(b.begin() + 8, b.begin() + 12, "WAVE");
+  return b.size() >= 12 && std::equal(b.begin(), b.begin() + 4, "RIFF") &&
+         std::equal(b.begin() + 8, b.begin() + 12, "WAVE");
 }
 
 Status finite3(const Vec3& v, const char* what) {
@@ -136,7 +168,8 @@ Result<std::unique_ptr<AnnotationStore>> AnnotationStore::open(const std::string
     if (s.IsIOError() && why.find("lock") != std::string::npos) {
       return io_error(path + ": the annotation store is open in another process (" + why + "); close that first");
     }
-    if (s.IsCorruption()) return corrupt(path + ": annotation store is damaged (" + why + "); restore it from a backup");
+    if (s.IsCorruption())
+      return corrupt(path + ": annotation store is damaged (" + why + "); restore it from a backup");
     return io_error(path + ": cannot open the annotation store (" + why + ")");
   }
   std::unique_ptr<AnnotationStore> store(new AnnotationStore(path, raw));
@@ -144,7 +177,9 @@ Result<std::unique_ptr<AnnotationStore>> AnnotationStore::open(const std::string
   return store;
 }
 
-AnnotationStore::~AnnotationStore() { delete db_; }
+AnnotationStore::~AnnotationStore() {
+  delete db_;
+}
 
 Status AnnotationStore::init() {
   VXR_ASSIGN_OR_RETURN(std::optional<std::string> version, get(kSchemaKey));
@@ -416,7 +451,7 @@ Status AnnotationStore::write_skeleton_diff(const Skeleton& before, const Skelet
 Status AnnotationStore::edit_skeleton(Id id, const std::function<Status(Skeleton&)>& edit) {
   VXR_ASSIGN_OR_RETURN(Skeleton before, skeleton(id));
   Skeleton after = before;
-  VXR_RETURN_IF_ERROR(edit(after));
+  if (Status s = edit(after); !s.is_ok()) return Status(s.code(), path_ + ": " + s.message());
   if (Status s = after.validate(); !s.is_ok()) return internal_error("skeleton edit broke the tree: " + s.message());
   leveldb::WriteBatch batch;
   VXR_RETURN_IF_ERROR(write_skeleton_diff(before, after, &batch));
@@ -458,7 +493,7 @@ Result<Id> AnnotationStore::split_skeleton(Id id, int64_t node) {
 }
 
 Result<std::map<int64_t, int64_t>> AnnotationStore::merge_skeletons(Id target, int64_t attach_to, Id source,
-                                                                      int64_t source_node) {
+                                                                    int64_t source_node) {
   if (target == source) return invalid_argument("cannot merge skeleton " + std::to_string(target) + " into itself");
   VXR_ASSIGN_OR_RETURN(Skeleton before, skeleton(target));
   VXR_ASSIGN_OR_RETURN(Skeleton src, skeleton(source));
@@ -581,7 +616,8 @@ Result<RoiContents> AnnotationStore::query(const Roi& box, std::optional<uint32_
   }
   VXR_ASSIGN_OR_RETURN(std::vector<Measurement> all_measures, measurements());
   for (const Measurement& m : all_measures)
-    if (box.contains(m.a) && box.contains(m.b) && (!timepoint || m.timepoint == *timepoint)) out.measurements.push_back(m);
+    if (box.contains(m.a) && box.contains(m.b) && (!timepoint || m.timepoint == *timepoint))
+      out.measurements.push_back(m);
   VXR_ASSIGN_OR_RETURN(std::vector<SkeletonInfo> sks, skeletons());
   for (const SkeletonInfo& info : sks) {
     VXR_ASSIGN_OR_RETURN(Skeleton sk, skeleton(info.id));
@@ -641,7 +677,8 @@ Result<Card> AnnotationStore::card(Id id, bool with_media) const {
     if (expect == 0) return Status::ok();
     VXR_ASSIGN_OR_RETURN(std::optional<std::string> b, get(blob_key(id, what)));
     if (!b || b->size() != expect) {
-      return corrupt(path_ + ": card " + std::to_string(id) + " " + what + " is missing or truncated; the store is damaged");
+      return corrupt(path_ + ": card " + std::to_string(id) + " " + what +
+                     " is missing or truncated; the store is damaged");
     }
     out->assign(b->begin(), b->end());
     return Status::ok();
@@ -700,7 +737,8 @@ Result<std::vector<Card>> AnnotationStore::search_cards(const std::string& query
   std::vector<Card> out;
   for (Card& c : all) {
     const std::string text = lower(c.title + "\n" + c.note);
-    if (std::all_of(words.begin(), words.end(), [&](const std::string& w) { return text.find(w) != std::string::npos; }))
+    if (std::all_of(words.begin(), words.end(),
+                    [&](const std::string& w) { return text.find(w) != std::string::npos; }))
       out.push_back(std::move(c));
   }
   return out;

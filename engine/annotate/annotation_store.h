@@ -21,16 +21,16 @@
 namespace leveldb {
 class DB;
 class WriteBatch;
-}
+}  // namespace leveldb
 
 namespace vxr::annotate {
 
 // What lies inside a box (AnnotationStore::query).
 struct RoiContents {
   std::vector<Marker> markers;
-  std::vector<Measurement> measurements;  // both end points inside
+  std::vector<Measurement> measurements;           // both end points inside
   std::vector<std::pair<Id, SkeletonNode>> nodes;  // (skeleton id, node)
-  std::vector<Track> tracks;              // at least one marker inside
+  std::vector<Track> tracks;                       // at least one marker inside
 };
 
 struct SkeletonInfo {
@@ -123,7 +123,8 @@ class AnnotationStore {
   Result<Id> next_id(const std::string& kind, leveldb::WriteBatch* batch);
   Status write(leveldb::WriteBatch* batch);
   Result<std::optional<std::string>> get(const std::string& key) const;
-  Status scan(const std::string& prefix, const std::function<Status(const std::string& key, const std::string& value)>& fn) const;
+  Status scan(const std::string& prefix,
+              const std::function<Status(const std::string& key, const std::string& value)>& fn) const;
   Status write_skeleton_diff(const Skeleton& before, const Skeleton& after, leveldb::WriteBatch* batch);
   Status check_track_markers(const std::vector<Id>& ids, std::vector<Id>* sorted) const;
   Status not_there(const std::string& kind, Id id) const;

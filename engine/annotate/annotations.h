@@ -34,7 +34,7 @@ double micrometres_per_unit(const std::string& unit);
 // One counted object / placed ball (counting tool, feature tracking).
 struct Marker {
   Id id = 0;
-  std::string cls = "default";          // counting class
+  std::string cls = "default";              // counting class
   std::array<double, 4> color{1, 1, 0, 1};  // RGBA 0..1
   Vec3 pos{0, 0, 0};
   uint32_t timepoint = 0;
@@ -87,9 +87,9 @@ struct Card {
   Id id = 0;
   std::string title;
   std::string note;
-  std::string scene_json;     // scene_to_json() text (engine/scene/render_settings.h)
-  int64_t created_unix = 0;   // seconds since 1970, UTC
-  std::string snapshot_path;  // a PNG kept outside the store (optional)
+  std::string scene_json;             // scene_to_json() text (engine/scene/render_settings.h)
+  int64_t created_unix = 0;           // seconds since 1970, UTC
+  std::string snapshot_path;          // a PNG kept outside the store (optional)
   std::vector<uint8_t> snapshot_png;  // PNG bytes kept in the store (optional)
   std::vector<uint8_t> audio_wav;     // WAV voice memo (optional)
   bool operator==(const Card&) const = default;

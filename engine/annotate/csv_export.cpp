@@ -11,7 +11,9 @@ std::string num(double v) {
   const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
   return ec == std::errc() ? std::string(buf, end) : std::string();
 }
-std::string unit_suffix(const VoxelSpace& space) { return csv_field(space.unit); }
+std::string unit_suffix(const VoxelSpace& space) {
+  return csv_field(space.unit);
+}
 }  // namespace
 
 std::string csv_field(const std::string& s) {
@@ -70,8 +72,8 @@ std::string tracks_csv(const std::vector<Track>& tracks, const std::vector<Marke
       auto it = by_id.find(id);
       if (it == by_id.end()) continue;
       const Marker& m = *it->second;
-      out += std::to_string(t.id) + ',' + csv_field(t.name) + ',' + std::to_string(step++) + ',' + std::to_string(m.id) +
-             ',' + std::to_string(m.timepoint);
+      out += std::to_string(t.id) + ',' + csv_field(t.name) + ',' + std::to_string(step++) + ',' +
+             std::to_string(m.id) + ',' + std::to_string(m.timepoint);
       for (double c : m.pos) out += ',' + num(c);
       out += ',' + (prev ? num(space.distance(prev->pos, m.pos)) : std::string()) + '\n';
       prev = &m;

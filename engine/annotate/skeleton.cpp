@@ -172,7 +172,8 @@ Result<std::map<int64_t, int64_t>> Skeleton::merge(Skeleton& other, int64_t othe
 
 Status Skeleton::validate() const {
   for (const auto& [id, n] : nodes_) {
-    if (id <= 0 || n.id != id) return internal_error("skeleton " + std::to_string(id_) + ": bad node id " + std::to_string(id));
+    if (id <= 0 || n.id != id)
+      return internal_error("skeleton " + std::to_string(id_) + ": bad node id " + std::to_string(id));
     if (n.parent != kNoParent && !nodes_.count(n.parent)) {
       return corrupt("skeleton " + std::to_string(id_) + ": node " + std::to_string(id) + " names parent " +
                      std::to_string(n.parent) + ", which does not exist");
@@ -186,7 +187,8 @@ Status Skeleton::validate() const {
     int64_t cur = id;
     while (cur != kNoParent && !proven.count(cur)) {
       if (!on_chain.insert(cur).second) {
-        return corrupt("skeleton " + std::to_string(id_) + ": node " + std::to_string(cur) + " is its own ancestor (a cycle)");
+        return corrupt("skeleton " + std::to_string(id_) + ": node " + std::to_string(cur) +
+                       " is its own ancestor (a cycle)");
       }
       chain.push_back(cur);
       cur = nodes_.at(cur).parent;

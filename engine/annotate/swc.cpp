@@ -11,16 +11,26 @@ namespace vxr::annotate {
 
 const char* swc_warning_kind_name(SwcWarningKind kind) {
   switch (kind) {
-    case SwcWarningKind::kMissingParent: return "missing-parent";
-    case SwcWarningKind::kSeveralRoots: return "several-roots";
-    case SwcWarningKind::kNonPositiveId: return "non-positive-id";
-    case SwcWarningKind::kUndefinedType: return "undefined-type";
-    case SwcWarningKind::kZeroRadiusSoma: return "zero-radius-soma";
-    case SwcWarningKind::kNegativeRadius: return "negative-radius";
-    case SwcWarningKind::kOddRootParent: return "odd-root-parent";
-    case SwcWarningKind::kExtraColumns: return "extra-columns";
-    case SwcWarningKind::kLongSegment: return "long-segment";
-    case SwcWarningKind::kRadiusJump: return "radius-jump";
+    case SwcWarningKind::kMissingParent:
+      return "missing-parent";
+    case SwcWarningKind::kSeveralRoots:
+      return "several-roots";
+    case SwcWarningKind::kNonPositiveId:
+      return "non-positive-id";
+    case SwcWarningKind::kUndefinedType:
+      return "undefined-type";
+    case SwcWarningKind::kZeroRadiusSoma:
+      return "zero-radius-soma";
+    case SwcWarningKind::kNegativeRadius:
+      return "negative-radius";
+    case SwcWarningKind::kOddRootParent:
+      return "odd-root-parent";
+    case SwcWarningKind::kExtraColumns:
+      return "extra-columns";
+    case SwcWarningKind::kLongSegment:
+      return "long-segment";
+    case SwcWarningKind::kRadiusJump:
+      return "radius-jump";
   }
   return "?";
 }
@@ -38,7 +48,9 @@ std::vector<int> SwcFile::lines_with(SwcWarningKind kind) const {
 
 namespace {
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
 
 bool parse_double(std::string_view tok, double* out) {
   if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
@@ -52,6 +64,13 @@ bool parse_integer(std::string_view tok, int64_t* out) {
   if (!parse_double(tok, &d) || d != std::floor(d) || std::fabs(d) > 9.0e15) return false;
   *out = static_cast<int64_t>(d);
   return true;
+}
+
+// A token as it may be quoted in a message: binary input must not reach the terminal raw.
+std::string printable(std::string_view tok) {
+  std::string out;
+  for (char c : tok.substr(0, 24)) out += (c >= 0x20 && c < 0x7f) ? c : '?';
+  return tok.size() > 24 ? out + "..." : out;
 }
 
 std::string fmt_num(double v) {
@@ -92,13 +111,14 @@ Result<SwcFile> parse_swc(const std::string& text, const std::string& name) {
       return invalid_argument(where(line_no) + "expected 7 columns (id type x y z radius parent), found " +
                               std::to_string(tok.size()));
     }
-    if (tok.size() > 7) warn(line_no, SwcWarningKind::kExtraColumns, std::to_string(tok.size()) + " columns; only the first 7 are read");
+    if (tok.size() > 7)
+      warn(line_no, SwcWarningKind::kExtraColumns, std::to_string(tok.size()) + " columns; only the first 7 are read");
     SwcSample s;
     s.line = line_no;
     double v[7];
     for (int c = 0; c < 7; ++c) {
       if (!parse_double(tok[c], &v[c])) {
-        return invalid_argument(where(line_no) + kColumns[c] + " '" + std::string(tok[c]) + "' is not a number");
+        return invalid_argument(where(line_no) + kColumns[c] + " '" + printable(tok[c]) + "' is not a number");
       }
     }
     int64_t type = 0;
@@ -112,22 +132,32 @@ Result<SwcFile> parse_swc(const std::string& text, const std::string& name) {
     file.samples.push_back(s);
   }
 
+  if (file.samples.empty())
+    return invalid_argument(name + ": no samples (lines of id type x y z radius parent); is this an SWC file?");
   // Ids must be unique: a repeated id makes every reference to it ambiguous.
   std::unordered_map<int64_t, size_t> index;
   for (size_t i = 0; i < file.samples.size(); ++i) {
     const SwcSample& s = file.samples[i];
     auto [it, fresh] = index.emplace(s.id, i);
     if (!fresh) {
-      return invalid_argument(where(s.line) + "sample id " + std::to_string(s.id) + " is repeated (first defined on line " +
-                              std::to_string(file.samples[it->second].line) + "); make ids unique");
+      return invalid_argument(where(s.line) + "sample id " + std::to_string(s.id) +
+                              " is repeated (first defined on line " + std::to_string(file.samples[it->second].line) +
+                              "); make ids unique");
     }
   }
   std::vector<int> root_lines;
   for (SwcSample& s : file.samples) {
-    if (s.id <= 0) warn(s.line, SwcWarningKind::kNonPositiveId, "sample id " + std::to_string(s.id) + " is not positive (SWC ids start at 1); ids are shifted on import");
-    if (s.type == 0) warn(s.line, SwcWarningKind::kUndefinedType, "sample " + std::to_string(s.id) + " has structure type 0 (undefined)");
-    if (s.radius < 0) warn(s.line, SwcWarningKind::kNegativeRadius, "sample " + std::to_string(s.id) + " has a negative radius " + fmt_num(s.radius));
-    if (s.type == 1 && s.radius == 0) warn(s.line, SwcWarningKind::kZeroRadiusSoma, "soma sample " + std::to_string(s.id) + " has radius 0");
+    if (s.id <= 0)
+      warn(s.line, SwcWarningKind::kNonPositiveId,
+           "sample id " + std::to_string(s.id) + " is not positive (SWC ids start at 1); ids are shifted on import");
+    if (s.type == 0)
+      warn(s.line, SwcWarningKind::kUndefinedType,
+           "sample " + std::to_string(s.id) + " has structure type 0 (undefined)");
+    if (s.radius < 0)
+      warn(s.line, SwcWarningKind::kNegativeRadius,
+           "sample " + std::to_string(s.id) + " has a negative radius " + fmt_num(s.radius));
+    if (s.type == 1 && s.radius == 0)
+      warn(s.line, SwcWarningKind::kZeroRadiusSoma, "soma sample " + std::to_string(s.id) + " has radius 0");
     if (s.parent < 0) {
       if (s.parent != kNoParent) {
         warn(s.line, SwcWarningKind::kOddRootParent, "parent " + std::to_string(s.parent) + " read as -1 (a root)");
@@ -136,8 +166,9 @@ Result<SwcFile> parse_swc(const std::string& text, const std::string& name) {
     } else if (s.parent == s.id) {
       return invalid_argument(where(s.line) + "sample " + std::to_string(s.id) + " is its own parent");
     } else if (!index.count(s.parent)) {
-      warn(s.line, SwcWarningKind::kMissingParent, "sample " + std::to_string(s.id) + " names parent " +
-                                                       std::to_string(s.parent) + ", which is not in the file; it becomes a root");
+      warn(s.line, SwcWarningKind::kMissingParent,
+           "sample " + std::to_string(s.id) + " names parent " + std::to_string(s.parent) +
+               ", which is not in the file; it becomes a root");
       s.parent = kNoParent;
     }
     if (s.parent == kNoParent) root_lines.push_back(s.line);
@@ -182,8 +213,9 @@ Result<SwcFile> parse_swc(const std::string& text, const std::string& name) {
       if (s.parent == kNoParent) continue;
       const double len = seg[k++];
       if (median > 0 && len > 10 * median) {
-        warn(s.line, SwcWarningKind::kLongSegment, "sample " + std::to_string(s.id) + " is " + fmt_num(len) +
-                                                       " from its parent, over 10x the median segment (" + fmt_num(median) + ")");
+        warn(s.line, SwcWarningKind::kLongSegment,
+             "sample " + std::to_string(s.id) + " is " + fmt_num(len) +
+                 " from its parent, over 10x the median segment (" + fmt_num(median) + ")");
       }
     }
   }
@@ -192,8 +224,8 @@ Result<SwcFile> parse_swc(const std::string& text, const std::string& name) {
     const SwcSample& p = file.samples[index.at(s.parent)];
     if (p.type == 1 || s.type == 1) continue;  // soma radii are not neurite radii
     if (s.radius > 0 && p.radius > 0 && (s.radius > 10 * p.radius || p.radius > 10 * s.radius)) {
-      warn(s.line, SwcWarningKind::kRadiusJump, "sample " + std::to_string(s.id) + " has radius " + fmt_num(s.radius) +
-                                                    ", its parent " + fmt_num(p.radius));
+      warn(s.line, SwcWarningKind::kRadiusJump,
+           "sample " + std::to_string(s.id) + " has radius " + fmt_num(s.radius) + ", its parent " + fmt_num(p.radius));
     }
   }
   std::stable_sort(file.warnings.begin(), file.warnings.end(),
@@ -217,7 +249,8 @@ Skeleton skeleton_from_swc(const SwcFile& file) {
   return sk;
 }
 
-std::string skeleton_to_swc(const Skeleton& skeleton, const std::string& header, std::map<int64_t, int64_t>* renumbered) {
+std::string skeleton_to_swc(const Skeleton& skeleton, const std::string& header,
+                            std::map<int64_t, int64_t>* renumbered) {
   std::string out;
   size_t start = 0;
   while (start < header.size()) {
@@ -232,8 +265,8 @@ std::string skeleton_to_swc(const Skeleton& skeleton, const std::string& header,
   for (int64_t id : skeleton.parent_first_order()) num[id] = next++;
   for (int64_t id : skeleton.parent_first_order()) {
     const SkeletonNode& n = *skeleton.find(id);
-    out += std::to_string(num.at(id)) + ' ' + std::to_string(n.type) + ' ' + fmt_num(n.pos[0]) + ' ' + fmt_num(n.pos[1]) +
-           ' ' + fmt_num(n.pos[2]) + ' ' + fmt_num(n.radius) + ' ' +
+    out += std::to_string(num.at(id)) + ' ' + std::to_string(n.type) + ' ' + fmt_num(n.pos[0]) + ' ' +
+           fmt_num(n.pos[1]) + ' ' + fmt_num(n.pos[2]) + ' ' + fmt_num(n.radius) + ' ' +
            (n.parent == kNoParent ? std::string("-1") : std::to_string(num.at(n.parent))) + '\n';
   }
   if (renumbered) *renumbered = std::move(num);

@@ -53,7 +53,8 @@ struct SwcFile {
 
 // `name` is used in messages (usually the path). Errors (kInvalidArgument):
 // a line that is not 7 numbers, a non-integer id/type/parent, a repeated id,
-// a sample that is its own ancestor; each says "<name>:<line>: ...".
+// a sample that is its own ancestor; each says "<name>:<line>: ...". A file
+// with no samples at all is an error too ("<name>: no samples ...").
 Result<SwcFile> parse_swc(const std::string& text, const std::string& name);
 Result<SwcFile> read_swc(const std::string& path);
 

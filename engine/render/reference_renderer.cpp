@@ -57,8 +57,8 @@ double opacity(double tau) { return -std::expm1(-tau); }
 
 class Tracer {
  public:
-  Tracer(const Volumes& v, const RaycastSetup& s, const TransferTable& tf, double step)
-      : v_(v), s_(s), tf_(tf), step_(step), fhat_(glm::normalize(s.rays.forward)) {}
+  Tracer(const Volumes& v, const RaycastSetup& s, const TransferTable& tf, const ReferenceOptions& o)
+      : v_(v), s_(s), tf_(tf), step_(o.step_voxels), fhat_(glm::normalize(s.rays.forward)), opt_(o) {}
 
   dvec4 normalise(const dvec4& raw) const {
     dvec4 x;
@@ -203,18 +203,31 @@ class Tracer {
     // decides it): neighbouring bricks then never both claim a ray.
     double t0 = 0.0, t1 = 1e300;
     for (int a = 0; a < 3; ++a) {
+      const double lo = std::max(0.0, opt_.clip_lo[a]), hi = std::min(double(s_.dims[a]), opt_.clip_hi[a]);
       if (dir[a] == 0.0) {
-        if (eye[a] < 0.0 || eye[a] >= s_.dims[a]) return dvec4(0.0);
+        if (eye[a] < lo || eye[a] >= hi) return dvec4(0.0);
         continue;
       }
-      double ta = (0.0 - eye[a]) / dir[a], tb = (s_.dims[a] - eye[a]) / dir[a];
+      double ta = (lo - eye[a]) / dir[a], tb = (hi - eye[a]) / dir[a];
       if (ta > tb) std::swap(ta, tb);
       t0 = std::max(t0, ta);
       t1 = std::min(t1, tb);
     }
+    const dvec3 pn(opt_.plane);
+    if (pn != dvec3(0.0)) {  // keep dot(n, eye + t dir) + w >= 0
+      const double num = glm::dot(pn, eye) + opt_.plane.w, den = glm::dot(pn, dir);
+      if (den > 0.0) t0 = std::max(t0, -num / den);
+      else if (den < 0.0) t1 = std::min(t1, -num / den);
+      else if (num < 0.0) return dvec4(0.0);
+    }
     if (!(t1 > t0)) return dvec4(0.0);
     Ray r;
     if (s_.model == OpticalModel::kMinIp) r.reduce = dvec4(1.0);
+    if (opt_.grid_from_eye) {
+      const double i0 = std::ceil(t0 / step_ - 0.5), i1 = std::ceil(t1 / step_ - 0.5);
+      for (double i = i0; i < i1 && !r.done; ++i) step(r, eye, dir, (i + 0.5) * step_, step_);
+      return finish(r, eye, dir);
+    }
     const double len = t1 - t0;
     const uint64_t n = static_cast<uint64_t>(std::ceil(len / step_));
     for (uint64_t i = 0; i < n && !r.done; ++i) {
@@ -232,6 +245,7 @@ class Tracer {
   const TransferTable& tf_;
   double step_;
   dvec3 fhat_;
+  const ReferenceOptions& opt_;
 };
 
 }  // namespace
@@ -268,7 +282,7 @@ Result<ImageRgbaF> render_reference(std::span<const DenseVolume> channels, const
                                   {channels[0].origin[0], channels[0].origin[1], channels[0].origin[2]}};
   const RaycastSetup setup = plan_raycast(camera, settings, placement, scales, width, height);
   const TransferTable table = build_transfer_table(settings);
-  const Tracer tracer(vols, setup, table, options.step_voxels);
+  const Tracer tracer(vols, setup, table, options);
 
   ImageRgbaF img{width, height, std::vector<float>(size_t(width) * height * 4)};
   std::atomic<uint32_t> next_row{0};

@@ -18,6 +18,16 @@ namespace vxr {
 struct ReferenceOptions {
   double step_voxels = 1.0 / 16.0;  // replaces the settings' step
   unsigned threads = 0;             // 0: hardware concurrency
+  // Clipping in voxel coordinates, as the out-of-core renderer's ROI and cut
+  // plane do it (render/lod/lod_traversal.h): only [clip_lo, clip_hi] and the
+  // side dot(plane.xyz, p) + plane.w >= 0 are drawn. Defaults clip nothing.
+  glm::dvec3 clip_lo{-1e300}, clip_hi{1e300};
+  glm::dvec4 plane{0.0};
+  // false: samples at segment midpoints from where the ray enters the box (the
+  // dense ray caster's grid). true: sample i at (i + 0.5) * step from the eye,
+  // each for a whole step: the out-of-core renderer's grid, which every brick
+  // shares, so a comparison at the same step takes the same samples.
+  bool grid_from_eye = false;
 };
 
 // Premultiplied RGBA, like Raycaster::render_float. Channels as for

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include "core/json_number.h"
 
 namespace vxr {
 namespace {
@@ -58,14 +59,25 @@ json to_j(const RenderSettings& s) {
 
 // Reads j[key] into out when present; a wrong type throws json::type_error,
 // which the callers turn into a message naming `key`.
-template <typename T>
-void get(const json& j, const char* key, T& out) {
-  if (j.contains(key)) out = j.at(key).get<T>();
-}
-
 struct KeyError {
   std::string message;
 };
+
+// Numbers go through json_number: a value the field's type cannot hold
+// (1e300 for an integer) is an error naming the key, not a wrapped value.
+template <typename T>
+void get(const json& j, const char* key, T& out) {
+  if (!j.contains(key)) return;
+  if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+    const std::optional<T> v = json_number<T>(j.at(key));
+    if (!v)
+      throw KeyError{"\"" + std::string(key) + "\": " + (j.at(key).is_number() ? j.at(key).dump() : "the value") +
+                     " is not " + (std::is_integral_v<T> ? "a non-negative integer in range" : "a finite number")};
+    out = *v;
+  } else {
+    out = j.at(key).get<T>();
+  }
+}
 
 void from_j(const json& j, RenderSettings& s) {
   if (!j.is_object()) throw KeyError{"the settings must be a JSON object"};
@@ -181,7 +193,15 @@ Result<RenderSettings> render_settings_from_json(const std::string& text) {
 }
 
 std::string scene_to_json(const Scene& s) {
-  json j = {{"volume", s.volume}, {"render", to_j(s.render)}};
+  json j = {{"volume", s.volume},
+            {"timepoint", s.timepoint},
+            {"channels", s.channels},
+            {"transform", {{"position", s.transform.position}, {"rotation", s.transform.rotation}, {"scale", s.transform.scale}}},
+            {"viewport", s.viewport},
+            {"renderer", s.renderer},
+            {"path", s.path},
+            {"lod_bias", s.lod_bias},
+            {"render", to_j(s.render)}};
   if (s.has_camera)
     j["camera"] = {{"eye", s.camera.eye}, {"target", s.camera.target}, {"up", s.camera.up}, {"fov_y_deg", s.camera.fov_y_deg}};
   return j.dump(2);
@@ -191,6 +211,37 @@ Result<Scene> scene_from_json(const std::string& text) {
   return parse<Scene>(text, [](const json& j, Scene& s) {
     if (!j.is_object()) throw KeyError{"the scene must be a JSON object"};
     get(j, "volume", s.volume);
+    get(j, "timepoint", s.timepoint);
+    get(j, "channels", s.channels);
+    if (j.contains("transform")) {
+      const json& t = j.at("transform");
+      if (!t.is_object()) throw KeyError{"\"transform\" must be an object {position, rotation, scale}"};
+      get(t, "position", s.transform.position);
+      get(t, "rotation", s.transform.rotation);
+      get(t, "scale", s.transform.scale);
+      double n2 = 0.0;
+      for (double v : s.transform.position)
+        if (!std::isfinite(v)) throw KeyError{"transform.position must be finite numbers"};
+      for (double v : s.transform.rotation) {
+        if (!std::isfinite(v)) throw KeyError{"transform.rotation must be finite numbers"};
+        n2 += v * v;
+      }
+      if (!(n2 > 0.0)) throw KeyError{"transform.rotation is the zero quaternion; use [1, 0, 0, 0] for no rotation"};
+      if (!(s.transform.scale > 0.0 && std::isfinite(s.transform.scale)))
+        throw KeyError{"transform.scale must be a positive finite number"};
+    }
+    get(j, "viewport", s.viewport);
+    if (s.viewport[0] > 16384 || s.viewport[1] > 16384 || (s.viewport[0] == 0) != (s.viewport[1] == 0))
+      throw KeyError{"viewport must be [width, height] of 1..16384 pixels each (or [0, 0])"};
+    get(j, "renderer", s.renderer);
+    if (!s.renderer.empty() && s.renderer != "lod" && s.renderer != "dense")
+      throw KeyError{"\"renderer\": use lod, dense or \"\", not '" + s.renderer + "'"};
+    get(j, "path", s.path);
+    if (!s.path.empty() && s.path != "compute" && s.path != "fragment")
+      throw KeyError{"\"path\": use compute, fragment or \"\", not '" + s.path + "'"};
+    get(j, "lod_bias", s.lod_bias);
+    if (!(std::isfinite(s.lod_bias) && std::abs(s.lod_bias) <= 16.0))
+      throw KeyError{"lod_bias must be within -16..16"};
     if (j.contains("camera")) {
       const json& c = j.at("camera");
       s.has_camera = true;
@@ -213,6 +264,27 @@ Result<Scene> scene_from_json(const std::string& text) {
     }
     if (j.contains("render")) from_j(j.at("render"), s.render);
   });
+}
+
+CameraState camera_in_volume_frame(const CameraState& camera, const VolumeTransform& t) {
+  const auto& q = t.rotation;
+  const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  // The inverse rotation is the conjugate of the normalised quaternion.
+  const double w = q[0] / n, x = -q[1] / n, y = -q[2] / n, z = -q[3] / n;
+  auto rotate = [&](const std::array<double, 3>& v) {  // v' = v + 2w(u x v) + 2u x (u x v), u = (x, y, z)
+    const double cx = y * v[2] - z * v[1], cy = z * v[0] - x * v[2], cz = x * v[1] - y * v[0];
+    const double ccx = y * cz - z * cy, ccy = z * cx - x * cz, ccz = x * cy - y * cx;
+    return std::array<double, 3>{v[0] + 2 * (w * cx + ccx), v[1] + 2 * (w * cy + ccy), v[2] + 2 * (w * cz + ccz)};
+  };
+  auto to_volume = [&](const std::array<double, 3>& p) {
+    auto r = rotate({p[0] - t.position[0], p[1] - t.position[1], p[2] - t.position[2]});
+    return std::array<double, 3>{r[0] / t.scale, r[1] / t.scale, r[2] / t.scale};
+  };
+  CameraState out = camera;
+  out.eye = to_volume(camera.eye);
+  out.target = to_volume(camera.target);
+  out.up = rotate(camera.up);
+  return out;
 }
 
 }  // namespace vxr

@@ -95,14 +95,39 @@ struct CameraState {
   bool operator==(const CameraState&) const = default;
 };
 
-// What a card stores: where the camera is, how the volume is drawn.
+// Where the volume sits in the world (the paper's grab/pinch transform):
+// world = position + rotation * (scale * v) for a point v of the volume's own
+// frame (world units, volume centred at 0, as CameraState). Uniform scale only:
+// the two-hand pinch scales about a point, and a uniform scale keeps the
+// picture a camera move away (see camera_in_volume_frame).
+struct VolumeTransform {
+  std::array<double, 3> position{0, 0, 0};
+  std::array<double, 4> rotation{1, 0, 0, 0};  // quaternion w, x, y, z (normalised on use)
+  double scale = 1.0;
+  bool operator==(const VolumeTransform&) const = default;
+};
+
+// What a card stores: everything `vxr render --card` needs to draw the same
+// picture again. Fields left at their defaults mean "the viewer's choice".
 struct Scene {
-  std::string volume;  // path or name of the volume it shows
-  CameraState camera;
+  std::string volume;  // the input: an absolute path, an OME-Zarr folder or procedural:vessels:SIDE
+  uint32_t timepoint = 0;
+  std::vector<uint32_t> channels;  // the volume's channels drawn, in order; empty: the first (up to 4)
+  VolumeTransform transform;
+  CameraState camera;  // the user's pose (eye, target, up) in world units
   bool has_camera = false;  // false: the viewer picks a default view
+  std::array<uint32_t, 2> viewport{0, 0};  // image width, height in pixels; 0: the viewer's size
+  std::string renderer;  // "lod", "dense" or "" (the default for the input)
+  std::string path;      // dense renderer's "compute" or "fragment"; "" = compute
+  double lod_bias = 0.0;  // lod renderer: log2 voxels per pixel accepted
   RenderSettings render;
   bool operator==(const Scene&) const = default;
 };
+
+// The camera that, looking at the untransformed volume, sees what `camera`
+// sees of the volume placed by `t`: the inverse transform applied to the
+// eye, target and up (fov unchanged). Exact in double.
+CameraState camera_in_volume_frame(const CameraState& camera, const VolumeTransform& t);
 
 // JSON text <-> structs. Missing keys keep their defaults; unknown keys are
 // ignored; wrong types, unknown enum names and malformed JSON give

@@ -3,6 +3,7 @@
 #include <lz4.h>
 #include <xxhash.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -63,6 +64,8 @@ bool bitwise_uniform(std::span<const uint8_t> payload, uint32_t bpv) {
 }
 
 }  // namespace
+
+uint64_t max_lz4_output(uint64_t stored_bytes) { return stored_bytes * 255 + 64; }
 
 vxc::Codec default_codec(DType dtype) { return dtype_bytes(dtype) > 1 ? vxc::Codec::kShuffleLz4 : vxc::Codec::kLz4; }
 
@@ -171,12 +174,33 @@ EncodedChunk encode_chunk(const ChunkKey& key, DType dtype, std::span<const uint
   return out;
 }
 
+Status check_uniform_value(DType dtype, double value) {
+  bool fits = false;
+  switch (dtype) {
+    case DType::kU8: fits = value >= 0 && value <= 255; break;
+    case DType::kI8: fits = value >= -128 && value <= 127; break;
+    case DType::kU16: fits = value >= 0 && value <= 65535; break;
+    case DType::kI16: fits = value >= -32768 && value <= 32767; break;
+    case DType::kU32: fits = value >= 0 && value <= 4294967295.0; break;
+    case DType::kI32: fits = value >= -2147483648.0 && value <= 2147483647.0; break;
+    case DType::kF32:
+      // Finite values beyond float's range would overflow the conversion.
+      return std::isnan(value) || (std::isfinite(value) && std::abs(value) > double(std::numeric_limits<float>::max()))
+                 ? corrupt("uniform chunk value " + std::to_string(value) + " is not a 32-bit float")
+                 : Status::ok();
+  }
+  if (!fits || value != std::trunc(value))
+    return corrupt("uniform chunk value " + std::to_string(value) + " does not fit its " + dtype_name(dtype) + " voxels");
+  return Status::ok();
+}
+
 Status decode_payload(vxc::Codec codec, DType dtype, const ChunkStats& stats, std::span<const uint8_t> stored,
                       std::span<uint8_t> out) {
   const uint32_t bpv = dtype_bytes(dtype);
   switch (codec) {
     case vxc::Codec::kUniform:
       if (!stored.empty()) return corrupt("uniform chunk carries a payload");
+      VXR_RETURN_IF_ERROR(check_uniform_value(dtype, stats.min));
       fill_value(dtype, stats.min, out);
       return Status::ok();
     case vxc::Codec::kRaw:
@@ -185,6 +209,8 @@ Status decode_payload(vxc::Codec codec, DType dtype, const ChunkStats& stats, st
       return Status::ok();
     case vxc::Codec::kLz4:
     case vxc::Codec::kShuffleLz4: {
+      // LZ4 expands at most ~255x; refuse before allocating for a claim it cannot meet.
+      if (out.size() > max_lz4_output(stored.size())) return corrupt("LZ4 payload is too short to decode to the chunk size");
       std::vector<uint8_t> tmp;
       uint8_t* dst = out.data();
       if (codec == vxc::Codec::kShuffleLz4) {

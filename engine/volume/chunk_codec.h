@@ -41,6 +41,15 @@ EncodedChunk encode_chunk(const ChunkKey& key, DType dtype, std::span<const uint
 Status decode_payload(vxc::Codec codec, DType dtype, const ChunkStats& stats, std::span<const uint8_t> stored,
                       std::span<uint8_t> out);
 
+// The most bytes an LZ4 block of `stored_bytes` can decode to (a match byte
+// encodes at most 255 bytes), so a payload claiming more is refused unread.
+uint64_t max_lz4_output(uint64_t stored_bytes);
+
+// kOk when `value` is what a uniform chunk of `dtype` may hold: a number the
+// dtype represents exactly (integers in range; any non-NaN value for f32).
+// Values come from files, and converting one that does not fit is undefined.
+Status check_uniform_value(DType dtype, double value);
+
 // Byte shuffle: dst[b * n + i] = byte b of element i (n elements of elem_bytes);
 // src and dst must not overlap.
 void byte_shuffle(const uint8_t* src, uint8_t* dst, size_t n, uint32_t elem_bytes);

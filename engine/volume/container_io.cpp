@@ -169,32 +169,69 @@ bool same_entry(const vxc::IndexEntry& a, const vxc::IndexEntry& b) {
 }
 }  // namespace
 
-Result<std::shared_ptr<const Chunk>> read_chunk_record(const ContainerFile& file, const ContainerLayout& layout,
-                                                       const vxc::IndexEntry& entry, uint64_t limit) {
-  const ChunkKey key = key_of(entry);
-  const std::string what = file.path() + ": " + describe_key(key);
+namespace {
+
+// The checks shared by read_chunk_record and check_chunk_record: the record
+// header agrees with the entry, the sizes are possible for the codec (before
+// anything is allocated from them), and the stored bytes pass their checksum.
+// Returns the stored bytes.
+Result<std::vector<uint8_t>> load_record(const ContainerFile& file, const ContainerLayout& layout,
+                                         const vxc::IndexEntry& entry, uint64_t limit, const std::string& what) {
   auto rec = read_record_header(file, entry.offset, limit);
   if (!rec) return corrupt(what + ": " + rec.status().message() + "; run `vxr verify`");
   if (!same_entry(entry_from_record(*rec, entry.offset), entry))
     return corrupt(what + ": chunk record disagrees with the index; run `vxr verify`");
   if (entry.raw_size != layout.payload_bytes())
     return corrupt(what + ": chunk size " + std::to_string(entry.raw_size) + " does not match the header");
-  auto chunk = std::make_shared<Chunk>();
-  chunk->key = key;
-  chunk->edge = layout.edge();
-  chunk->dtype = layout.info.dtype;
-  chunk->stats = {entry.min, entry.max};
-  chunk->data.resize(entry.raw_size);
   const auto codec = static_cast<vxc::Codec>(entry.codec);
+  const bool lz4 = codec == vxc::Codec::kLz4 || codec == vxc::Codec::kShuffleLz4;
+  if ((codec == vxc::Codec::kUniform && entry.stored_size != 0) ||
+      (codec == vxc::Codec::kRaw && entry.stored_size != entry.raw_size) ||
+      (lz4 && entry.raw_size > max_lz4_output(entry.stored_size)))
+    return corrupt(what + ": stored size " + std::to_string(entry.stored_size) + " is impossible for its codec; run `vxr verify`");
+  // stored_size <= raw_size here (or LZ4's bound of the file's own bytes): read_record_header checked it fits the file.
   std::vector<uint8_t> stored(entry.stored_size);
   if (!stored.empty()) {
     VXR_RETURN_IF_ERROR(file.read_at(stored.data(), stored.size(), entry.offset + sizeof(vxc::RecordHeader)));
     if (vxc::checksum(stored.data(), stored.size()) != entry.payload_checksum)
       return corrupt(what + ": payload fails its checksum (the file is damaged); run `vxr verify`");
   }
-  if (Status s = decode_payload(codec, chunk->dtype, chunk->stats, stored, chunk->data); !s)
+  return stored;
+}
+
+}  // namespace
+
+Result<std::shared_ptr<const Chunk>> read_chunk_record(const ContainerFile& file, const ContainerLayout& layout,
+                                                       const vxc::IndexEntry& entry, uint64_t limit) {
+  const ChunkKey key = key_of(entry);
+  const std::string what = file.path() + ": " + describe_key(key);
+  VXR_ASSIGN_OR_RETURN(const std::vector<uint8_t> stored, load_record(file, layout, entry, limit, what));
+  auto chunk = std::make_shared<Chunk>();
+  chunk->key = key;
+  chunk->edge = layout.edge();
+  chunk->dtype = layout.info.dtype;
+  chunk->stats = {entry.min, entry.max};
+  chunk->data.resize(entry.raw_size);
+  if (Status s = decode_payload(static_cast<vxc::Codec>(entry.codec), chunk->dtype, chunk->stats, stored, chunk->data); !s)
     return corrupt(what + ": " + s.message());
   return std::shared_ptr<const Chunk>(std::move(chunk));
+}
+
+Status check_chunk_record(const ContainerFile& file, const ContainerLayout& layout, const vxc::IndexEntry& entry,
+                          uint64_t limit) {
+  const std::string what = file.path() + ": " + describe_key(key_of(entry));
+  VXR_ASSIGN_OR_RETURN(const std::vector<uint8_t> stored, load_record(file, layout, entry, limit, what));
+  const auto codec = static_cast<vxc::Codec>(entry.codec);
+  Status s = Status::ok();
+  if (codec == vxc::Codec::kUniform) {
+    // Nothing to decode: filling edge^3 voxels would cost work the file's bytes do not bound.
+    s = check_uniform_value(layout.info.dtype, entry.min);
+  } else {
+    std::vector<uint8_t> data(entry.raw_size);  // at most ~255x the stored bytes (load_record checked)
+    s = decode_payload(codec, layout.info.dtype, {entry.min, entry.max}, stored, data);
+  }
+  if (!s) return corrupt(what + ": " + s.message());
+  return Status::ok();
 }
 
 Result<IndexScan> scan_index(const ContainerFile& file, uint64_t index_offset, uint64_t count,

@@ -3,18 +3,24 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
+
+#include "core/checked_math.h"
 
 namespace vxr {
 
 uint64_t ContainerLayout::chunks_in_level(uint32_t level) const {
   const auto& c = levels.at(level).chunk_counts;
-  return uint64_t(c[0]) * c[1] * c[2];
+  return checked_product({c[0], c[1], c[2]}).value_or(std::numeric_limits<uint64_t>::max());
 }
 
 uint64_t ContainerLayout::total_chunks() const {
+  // Saturates instead of wrapping: a count no index can match (parse_header
+  // refuses such headers; this keeps a layout built some other way honest).
+  constexpr uint64_t kMax = std::numeric_limits<uint64_t>::max();
   uint64_t n = 0;
-  for (uint32_t l = 0; l < levels.size(); ++l) n += chunks_in_level(l);
-  return n * info.channels * info.timepoints;
+  for (uint32_t l = 0; l < levels.size(); ++l) n = checked_sum({n, chunks_in_level(l)}).value_or(kMax);
+  return checked_product({n, info.channels, info.timepoints}).value_or(kMax);
 }
 
 bool ContainerLayout::contains(const ChunkKey& k) const {
@@ -136,6 +142,11 @@ std::vector<uint8_t> serialize_header(const ContainerLayout& layout) {
   return out;
 }
 
+namespace {
+constexpr uint64_t kMaxDim = uint64_t(1) << 40;     // make_layout's limit
+constexpr uint64_t kMaxChunks = uint64_t(1) << 48;  // 80 bytes each: a 22 PB index
+}  // namespace
+
 Result<ContainerLayout> parse_header(std::span<const uint8_t> bytes, const std::string& what, uint64_t* header_bytes) {
   vxc::FileHeader h;
   if (bytes.size() < sizeof h) return corrupt(what + ": too short to be a .vxc container");
@@ -169,6 +180,15 @@ Result<ContainerLayout> parse_header(std::span<const uint8_t> bytes, const std::
   L.codec = static_cast<vxc::Codec>(h.codec);
   if (L.chunk_size < 8 || L.chunk_size > 512 || L.apron > 4 || !L.info.channels || !L.info.timepoints)
     return corrupt(what + ": header holds impossible chunk size, apron, channels or timepoints");
+  // The writer's limits (make_layout): anything beyond them is damage, and
+  // refusing it here keeps every count derived below far from overflow.
+  for (int a = 0; a < 3; ++a) {
+    if (h.dims[a] == 0 || h.dims[a] > kMaxDim)
+      return corrupt(what + ": header claims absurd dimensions (" + std::to_string(h.dims[0]) + " x " +
+                     std::to_string(h.dims[1]) + " x " + std::to_string(h.dims[2]) + "); the file is damaged");
+    if (!(h.voxel_size[a] > 0) || !std::isfinite(h.voxel_size[a]))
+      return corrupt(what + ": header holds a voxel size that is not a positive number; the file is damaged");
+  }
   for (uint32_t l = 0; l < h.levels; ++l) {
     vxc::LevelRecord r;
     std::memcpy(&r, bytes.data() + sizeof h + l * sizeof r, sizeof r);
@@ -177,13 +197,22 @@ Result<ContainerLayout> parse_header(std::span<const uint8_t> bytes, const std::
       li.dims[a] = r.dims[a];
       li.chunk_counts[a] = r.chunk_counts[a];
       li.downsample[a] = r.downsample[a];
-      if (r.dims[a] == 0 || (r.dims[a] + L.chunk_size - 1) / L.chunk_size != r.chunk_counts[a])
+      if (r.dims[a] == 0 || r.dims[a] > kMaxDim || (r.dims[a] + L.chunk_size - 1) / L.chunk_size != r.chunk_counts[a] ||
+          r.downsample[a] == 0)
         return corrupt(what + ": level " + std::to_string(l) + " record is inconsistent");
     }
     L.levels.push_back(li);
   }
   for (int a = 0; a < 3; ++a)
     if (L.levels[0].dims[a] != L.info.dims[a]) return corrupt(what + ": level 0 dims differ from the volume dims");
+  // Every count the reader and verifier derive (index size, positions) must
+  // fit comfortably in 64 bits; a real index this large would not fit on disk.
+  const auto chunks = checked_product({L.total_chunks(), uint64_t(sizeof(vxc::IndexEntry))});
+  if (!chunks || L.total_chunks() > kMaxChunks)
+    return corrupt(what + ": header claims absurd dimensions (" + std::to_string(h.dims[0]) + " x " +
+                   std::to_string(h.dims[1]) + " x " + std::to_string(h.dims[2]) + ", " +
+                   std::to_string(L.info.channels) + " channels, " + std::to_string(L.info.timepoints) +
+                   " timepoints: too many chunks); the file is damaged");
   *header_bytes = h.header_bytes;
   return L;
 }

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "core/checked_math.h"
+
 namespace vxr {
 
 Result<std::unique_ptr<ContainerReader>> ContainerReader::open(const std::string& path) {
@@ -35,7 +37,7 @@ Result<std::unique_ptr<ContainerReader>> ContainerReader::open(const std::string
   if (f.file_bytes != size) return corrupt(path + ": file is " + std::to_string(size) + " bytes, its footer says " +
                                            std::to_string(f.file_bytes) + " (truncated or appended to)");
   if (f.header_checksum != header_sum) return corrupt(path + ": footer does not belong to this header");
-  if (f.index_offset < header_bytes || f.chunk_count > size / sizeof(vxc::IndexEntry) ||
+  if (f.index_offset < header_bytes || f.index_offset > size || f.chunk_count > size / sizeof(vxc::IndexEntry) ||
       f.index_bytes != sizeof(vxc::IndexHeader) + f.chunk_count * sizeof(vxc::IndexEntry) ||
       f.index_offset + f.index_bytes + sizeof f != size)
     return corrupt(path + ": footer points at an impossible index");
@@ -149,7 +151,7 @@ Result<DenseVolume> read_level_dense(const ChunkSource& source, uint32_t level, 
   const uint32_t bpv = dtype_bytes(info.dtype);
   for (int a = 0; a < 3; ++a)
     if (li.dims[a] > 0xffffffffull) return out_of_range("level " + std::to_string(level) + " is too large for memory");
-  const uint64_t bytes = li.dims[0] * li.dims[1] * li.dims[2] * bpv;
+  const uint64_t bytes = checked_product({li.dims[0], li.dims[1], li.dims[2], bpv}).value_or(~uint64_t(0));
   if (bytes > max_bytes)
     return out_of_range("level " + std::to_string(level) + " needs " + std::to_string(bytes >> 20) +
                         " MiB, more than the " + std::to_string(max_bytes >> 20) + " MiB allowed; pick a coarser level");
@@ -184,7 +186,8 @@ uint32_t finest_level_that_fits(const ChunkSource& source, uint64_t max_side, ui
   const uint32_t bpv = dtype_bytes(source.info().dtype);
   for (uint32_t l = 0; l < levels.size(); ++l) {
     const auto& d = levels[l].dims;
-    if (d[0] <= max_side && d[1] <= max_side && d[2] <= max_side && d[0] * d[1] * d[2] * bpv <= max_bytes) return l;
+    const auto bytes = checked_product({d[0], d[1], d[2], bpv});
+    if (d[0] <= max_side && d[1] <= max_side && d[2] <= max_side && bytes && *bytes <= max_bytes) return l;
   }
   return static_cast<uint32_t>(levels.size() - 1);
 }

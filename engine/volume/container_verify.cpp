@@ -45,6 +45,8 @@ VerifyReport verify_container(const std::string& path) {
     else if (f.footer_checksum != vxc::checksum(&f, 48))
       rep.problems.push_back("footer: fails its checksum");
     else if (f.file_bytes != size || f.header_checksum != header_sum || f.index_offset < header_bytes ||
+             f.index_offset > size ||
+             f.chunk_count > size / sizeof(vxc::IndexEntry) ||
              f.index_bytes != sizeof(vxc::IndexHeader) + f.chunk_count * sizeof(vxc::IndexEntry) ||
              f.index_offset + f.index_bytes + sizeof f != size)
       rep.problems.push_back("footer: describes a different file (size, header or index position)");
@@ -56,9 +58,8 @@ VerifyReport verify_container(const std::string& path) {
 
   auto check_entry = [&](const vxc::IndexEntry& e, uint64_t limit) {
     ++rep.chunks_checked;
-    auto chunk = read_chunk_record(*file, L, e, limit);
-    if (!chunk) {
-      std::string msg = chunk.status().message();
+    if (Status s = check_chunk_record(*file, L, e, limit); !s) {
+      std::string msg = s.message();
       const std::string prefix = path + ": ";
       if (msg.rfind(prefix, 0) == 0) msg = msg.substr(prefix.size());
       rep.problems.push_back("chunk " + msg);

@@ -23,6 +23,14 @@
 vec4 vxr_sample(vec3 p);
 vec4 vxr_transfer(int channel, float x);
 
+// Where depth-coded colour is measured: the position in the volume's voxel
+// space (the box [0, dims] of P). A dense includer samples in that space
+// already; a brick marcher samples in brick-local voxels and defines this to
+// map the ray parameter t (level-0 voxels along the unit ray) back.
+#ifndef VXR_DEPTH_POS
+#define VXR_DEPTH_POS(pos, t) (pos)
+#endif
+
 // Specialization constants (ids 100..103, clear of an includer's own): the
 // pipeline is built per model / channel count / feature set, so the dead
 // branches never reach the driver's compiler (lavapipe compiles the whole
@@ -150,7 +158,7 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
   const bool depth_color = VXR_SC_DEPTH_COLOR;
 
   if (model == VXR_MODEL_MIP || model == VXR_MODEL_MINIP) {
-    float dc = depth_color ? vxr_depth_coord(P, pos) : 0.0;
+    float dc = depth_color ? vxr_depth_coord(P, VXR_DEPTH_POS(pos, t)) : 0.0;
     for (int c = 0; c < n; ++c) {
       bool better = model == VXR_MODEL_MIP ? x[c] > r.reduce[c] : x[c] < r.reduce[c];
       if (better) {
@@ -185,7 +193,7 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
     vec4 mag = sqrt(gx * gx + gy * gy + gz * gz);
     gfac = clamp((mag - P.gradient.y) / (P.gradient.z - P.gradient.y), 0.0, 1.0);
   }
-  float dc = depth_color ? vxr_depth_coord(P, pos) : 0.0;
+  float dc = depth_color ? vxr_depth_coord(P, VXR_DEPTH_POS(pos, t)) : 0.0;
   float density = P.march.y;
   vec3 mix_color = vec3(0.0);
   float mix_tau = 0.0;
@@ -240,6 +248,20 @@ void vxr_march(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t_orig
   }
 }
 
+// The isosurface's colour at the crossing `pos` (ray parameter t): headlight
+// Lambert + specular on the central-difference normal. `dir`: the ray's unit
+// direction. A brick marcher calls it while the crossing's brick is bound.
+vec4 vxr_iso_shade(RaycastParams P, vec3 pos, vec3 dir, float t) {
+  int ic = int(P.control2.y);
+  vec4 gx, gy, gz;
+  vxr_gradients(P, pos, gx, gy, gz);
+  vec3 g = vec3(gx[ic], gy[ic], gz[ic]);
+  float ndl = dot(g, g) > 0.0 ? abs(dot(normalize(g), dir)) : 1.0;  // headlight
+  vec3 base = vxr_transfer(ic, VXR_SC_DEPTH_COLOR ? vxr_depth_coord(P, VXR_DEPTH_POS(pos, t)) : P.iso.x).rgb;
+  vec3 rgb = base * (P.iso.y + P.iso.z * ndl) + vec3(P.iso.w * pow(ndl, P.shading.x));
+  return vec4(clamp(rgb, 0.0, 1.0), 1.0);
+}
+
 // The ray's premultiplied RGBA. `dir` is the ray's unit direction (for shading).
 vec4 vxr_finish(VxrRay r, RaycastParams P, vec3 eye, vec3 dir) {
   const int n = VXR_SC_CHANNELS;
@@ -257,15 +279,7 @@ vec4 vxr_finish(VxrRay r, RaycastParams P, vec3 eye, vec3 dir) {
   }
   if (model == VXR_MODEL_ISOSURFACE) {
     if (r.hit_t < 0.0) return vec4(0.0);
-    vec3 pos = eye + r.hit_t * dir;
-    int ic = int(P.control2.y);
-    vec4 gx, gy, gz;
-    vxr_gradients(P, pos, gx, gy, gz);
-    vec3 g = vec3(gx[ic], gy[ic], gz[ic]);
-    float ndl = dot(g, g) > 0.0 ? abs(dot(normalize(g), dir)) : 1.0;  // headlight
-    vec3 base = vxr_transfer(ic, depth_color ? vxr_depth_coord(P, pos) : P.iso.x).rgb;
-    vec3 rgb = base * (P.iso.y + P.iso.z * ndl) + vec3(P.iso.w * pow(ndl, P.shading.x));
-    return vec4(clamp(rgb, 0.0, 1.0), 1.0);
+    return vxr_iso_shade(P, eye + r.hit_t * dir, dir, r.hit_t);
   }
   // MIP, MinIP, average: the reduced value through the transfer function.
   if (r.count <= 0.0) return vec4(0.0);

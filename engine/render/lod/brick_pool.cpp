@@ -5,8 +5,49 @@
 #include <string>
 
 #include "core/trace.h"
+#include "shared/raycast_params.h"
+#include "volume/dense_volume.h"
 
 namespace vxr {
+
+VkFormat brick_texel_format(DType dtype) {
+  switch (dtype) {
+    case DType::kU8: return VK_FORMAT_R8_UNORM;
+    case DType::kU16: return VK_FORMAT_R16_UNORM;
+    default: return VK_FORMAT_R32_SFLOAT;
+  }
+}
+
+double brick_value_scale(DType dtype) {
+  switch (dtype) {
+    case DType::kU8: return 255.0;
+    case DType::kU16: return 65535.0;
+    default: return 1.0;
+  }
+}
+
+// Native voxels -> atlas texels: u8/u16 as they are, everything else as float
+// in data units (NaN to 0, clamped to +-1e30: the dense path's renderable_value).
+void convert_to_texels(DType dtype, const uint8_t* in, size_t n, uint8_t* out) {
+  auto to_float = [&](auto tag) {
+    using T = decltype(tag);
+    float* o = reinterpret_cast<float*>(out);
+    for (size_t i = 0; i < n; ++i) {
+      T v;
+      std::memcpy(&v, in + i * sizeof(T), sizeof(T));
+      o[i] = static_cast<float>(renderable_value(static_cast<double>(v)));
+    }
+  };
+  switch (dtype) {
+    case DType::kU8: std::memcpy(out, in, n); break;
+    case DType::kU16: std::memcpy(out, in, n * 2); break;
+    case DType::kI8: to_float(int8_t{}); break;
+    case DType::kI16: to_float(int16_t{}); break;
+    case DType::kU32: to_float(uint32_t{}); break;
+    case DType::kI32: to_float(int32_t{}); break;
+    case DType::kF32: to_float(float{}); break;
+  }
+}
 
 Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_bytes, uint32_t max_dim,
                              uint64_t max_bytes) {
@@ -28,52 +69,188 @@ Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_by
 Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const ChunkSource& source,
                                                      const BrickPoolOptions& options) {
   std::unique_ptr<BrickPool> p(new BrickPool(ctx, source));
-  VkFormat format;
-  switch (source.info().dtype) {
-    case DType::kU8: format = VK_FORMAT_R8_UNORM; p->texel_bytes_ = 1; break;
-    case DType::kU16: format = VK_FORMAT_R16_UNORM; p->texel_bytes_ = 2; break;
-    default:
-      return unsupported(std::string("brick pool: bricks must be u8 or u16, not ") + dtype_name(source.info().dtype));
+  const DType dtype = source.info().dtype;
+  const VkFormat format = brick_texel_format(dtype);
+  p->texel_bytes_ = gpu::format_texel_bytes(format);
+  if (format == VK_FORMAT_R32_SFLOAT) {
+    VkFormatProperties props;
+    vkGetPhysicalDeviceFormatProperties(ctx.physical_device(), format, &props);
+    if (!(props.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT))
+      return unsupported("brick pool: " + ctx.info().name + " cannot filter R32_SFLOAT 3D textures; " +
+                         dtype_name(dtype) + " volumes need it");
   }
-  if (options.slots.x == 0 || options.slots.y == 0 || options.slots.z == 0)
+  glm::uvec3 slots = options.slots;
+  const bool auto_slots = slots == glm::uvec3(0);
+  if (!auto_slots && (slots.x == 0 || slots.y == 0 || slots.z == 0))
     return invalid_argument("brick pool: every axis needs at least one slot");
-  p->edge_ = source.chunk_size() + 2 * source.apron();
-  p->brick_bytes_ = uint64_t(p->edge_) * p->edge_ * p->edge_ * p->texel_bytes_;
-  VXR_ASSIGN_OR_RETURN(p->slots_, fit_slots(options.slots, p->edge_, p->texel_bytes_, ctx.limits().maxImageDimension3D,
-                                            kMaxAtlasBytes));
-  const uint64_t ext[3] = {uint64_t(p->slots_.x) * p->edge_, uint64_t(p->slots_.y) * p->edge_,
-                           uint64_t(p->slots_.z) * p->edge_};
+  if (options.apron > 4) return invalid_argument("brick pool: an apron of at most 4 voxels, not " +
+                                                 std::to_string(options.apron));
+  p->channel_map_ = options.channels;
+  if (p->channel_map_.empty())
+    for (uint32_t c = 0; c < std::min<uint32_t>(source.info().channels, VXR_MAX_CHANNELS); ++c)
+      p->channel_map_.push_back(c);
+  if (p->channel_map_.size() > VXR_MAX_CHANNELS)
+    return invalid_argument("brick pool: " + std::to_string(p->channel_map_.size()) + " channels asked for, at most " +
+                            std::to_string(VXR_MAX_CHANNELS) + " are drawn together");
+  for (uint32_t c : p->channel_map_)
+    if (c >= source.info().channels)
+      return invalid_argument("brick pool: channel " + std::to_string(c) + " asked for, the volume has " +
+                              std::to_string(source.info().channels));
+  const uint32_t nch = static_cast<uint32_t>(p->channel_map_.size());
+  p->apron_ = std::max(options.apron, source.apron());
+  p->edge_ = source.chunk_size() + 2 * p->apron_;
+  p->channel_bytes_ = uint64_t(p->edge_) * p->edge_ * p->edge_ * p->texel_bytes_;
+  p->brick_bytes_ = p->channel_bytes_ * nch;
+  if (auto_slots) {
+    // Halve the largest axis until the atlases fit (at least 2 x 2 x 2).
+    slots = {16, 16, 8};
+    while (uint64_t(slots.x) * slots.y * slots.z * p->brick_bytes_ > options.auto_atlas_bytes &&
+           slots.x * slots.y * slots.z > 8) {
+      uint32_t& a = slots.x >= slots.y && slots.x >= slots.z ? slots.x : slots.y >= slots.z ? slots.y : slots.z;
+      a /= 2;
+    }
+  }
+  // Lowered further to fit the device, so containers with wide chunks (up to 512 + apron) still draw.
+  VXR_ASSIGN_OR_RETURN(slots, fit_slots(slots, p->edge_, p->texel_bytes_ * nch, ctx.limits().maxImageDimension3D,
+                                        kMaxAtlasBytes));
+  p->slots_ = slots;
+  const uint64_t ext[3] = {uint64_t(slots.x) * p->edge_, uint64_t(slots.y) * p->edge_, uint64_t(slots.z) * p->edge_};
   // The ring must hold at least one brick, however wide the container's chunks are.
   const uint64_t staging_bytes = std::max(options.staging_bytes, p->brick_bytes_);
-  VXR_ASSIGN_OR_RETURN(p->atlas_, gpu::create_image(ctx, {VK_IMAGE_TYPE_3D, format,
-                                                          {uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])},
-                                                          VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                                          "brick atlas"}));
+  for (uint32_t c = 0; c < nch; ++c) {
+    VXR_ASSIGN_OR_RETURN(gpu::Image atlas,
+                         gpu::create_image(ctx, {VK_IMAGE_TYPE_3D, format,
+                                                 {uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])},
+                                                 VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                                 "brick atlas"}));
+    p->atlases_.push_back(std::move(atlas));
+  }
   VXR_ASSIGN_OR_RETURN(p->staging_, gpu::create_buffer(ctx, {staging_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                                              gpu::MemoryIntent::kUpload, "brick staging ring"}));
   // Clear once so never-written texels are defined (validation and determinism).
   VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-    gpu::transition_image(cmd, p->atlas_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
-                          VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
-    VkClearColorValue zero{};
-    VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-    vkCmdClearColorImage(cmd, p->atlas_.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &zero, 1, &range);
-    gpu::transition_image(cmd, p->atlas_, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_CLEAR_BIT,
-                          VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    for (gpu::Image& atlas : p->atlases_) {
+      gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                            VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+      VkClearColorValue zero{};
+      VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+      vkCmdClearColorImage(cmd, atlas.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &zero, 1, &range);
+      gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                            VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                            VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    }
   }));
   p->slot_.resize(p->capacity());
   for (uint32_t i = p->capacity(); i-- > 0;) p->free_.push_back(i);
   return p;
 }
 
+Status BrickPool::fill_slot(const ChunkKey& key, uint8_t* out) const {
+  VXR_ASSIGN_OR_RETURN(bool filled, fill_slot_from(key, out, [this](const ChunkKey& k) { return src_.read(k); }));
+  return filled ? Status::ok() : internal_error("brick pool: the source returned no chunk");
+}
+
+void BrickPool::slot_chunks(ChunkKey brick, std::vector<ChunkKey>& out) const {
+  const LevelInfo& li = src_.levels()[brick.level];
+  const bool neighbours = apron_ > src_.apron();
+  for (uint32_t c : channel_map_) {
+    brick.channel = c;
+    if (!neighbours) {
+      out.push_back(brick);
+      continue;
+    }
+    // fill_slot_from reads exactly the neighbours that exist (see there).
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int64_t x = int64_t(brick.x) + dx, y = int64_t(brick.y) + dy, z = int64_t(brick.z) + dz;
+          if (x < 0 || y < 0 || z < 0 || x >= li.chunk_counts[0] || y >= li.chunk_counts[1] ||
+              z >= li.chunk_counts[2])
+            continue;
+          ChunkKey k = brick;
+          k.x = uint32_t(x), k.y = uint32_t(y), k.z = uint32_t(z);
+          out.push_back(k);
+        }
+  }
+}
+
+Result<bool> BrickPool::fill_slot_from(const ChunkKey& key, uint8_t* out, const ReadChunk& fetch) const {
+  const DType dtype = src_.info().dtype;
+  const uint32_t a = src_.apron(), cs = src_.chunk_size();
+  // nullptr: not loaded yet (streaming); the slot is left unfinished.
+  auto read = [&](const ChunkKey& k) -> Result<std::shared_ptr<const Chunk>> {
+    VXR_ASSIGN_OR_RETURN(auto chunk, fetch(k));
+    if (!chunk) return chunk;
+    const uint32_t e = cs + 2 * a;
+    if (chunk->edge != e || chunk->dtype != dtype || chunk->data.size() != uint64_t(e) * e * e * dtype_bytes(dtype))
+      return internal_error("brick pool: chunk level " + std::to_string(k.level) + " has edge " +
+                            std::to_string(chunk->edge) + " and " + std::to_string(chunk->data.size()) +
+                            " bytes, expected edge " + std::to_string(e) + " of " + dtype_name(dtype));
+    return chunk;
+  };
+  if (apron_ == a) {  // the payload is the slot
+    VXR_ASSIGN_OR_RETURN(auto chunk, read(key));
+    if (!chunk) return false;
+    convert_to_texels(dtype, chunk->data.data(), size_t(edge_) * edge_ * edge_, out);
+    return true;
+  }
+  // Wider than the source's apron: slot voxel i of an axis is the level's
+  // voxel clamp(c * cs - apron_ + i, 0, dims - 1), which lies in this chunk's
+  // payload or in a neighbour's (offset -1, 0 or +1: apron_ <= 4 < cs).
+  const LevelInfo& li = src_.levels()[key.level];
+  const uint32_t c[3] = {key.x, key.y, key.z};
+  std::vector<int8_t> nb[3];       // neighbour offset per slot voxel and axis
+  std::vector<uint32_t> local[3];  // payload index within that neighbour
+  for (int ax = 0; ax < 3; ++ax) {
+    nb[ax].resize(edge_);
+    local[ax].resize(edge_);
+    for (uint32_t i = 0; i < edge_; ++i) {
+      const int64_t raw = int64_t(c[ax]) * cs - int64_t(apron_) + i;
+      const int64_t own = raw - (int64_t(c[ax]) * cs - int64_t(a));  // index in this chunk's payload
+      if (own >= 0 && own < int64_t(cs + 2 * a)) {
+        nb[ax][i] = 0;  // the payload already applies the clamp rule
+        local[ax][i] = uint32_t(own);
+        continue;
+      }
+      const int64_t g = std::clamp<int64_t>(raw, 0, int64_t(li.dims[ax]) - 1);
+      const int64_t n = g / cs;
+      nb[ax][i] = int8_t(n - int64_t(c[ax]));
+      local[ax][i] = uint32_t(g - n * cs + a);
+    }
+  }
+  // The (up to 27) chunks, converted to texels once each.
+  std::vector<uint8_t> texels[27];
+  const uint32_t e = cs + 2 * a;
+  const size_t payload = size_t(e) * e * e;
+  for (uint32_t z = 0; z < edge_; ++z)
+    for (uint32_t y = 0; y < edge_; ++y)
+      for (uint32_t x = 0; x < edge_; ++x) {
+        const int slot = (nb[0][x] + 1) + 3 * (nb[1][y] + 1) + 9 * (nb[2][z] + 1);
+        if (texels[slot].empty()) {
+          ChunkKey k = key;
+          k.x = uint32_t(int64_t(key.x) + nb[0][x]);
+          k.y = uint32_t(int64_t(key.y) + nb[1][y]);
+          k.z = uint32_t(int64_t(key.z) + nb[2][z]);
+          VXR_ASSIGN_OR_RETURN(auto chunk, read(k));
+          if (!chunk) return false;
+          texels[slot].resize(payload * texel_bytes_);
+          convert_to_texels(dtype, chunk->data.data(), payload, texels[slot].data());
+        }
+        const size_t from = (size_t(local[2][z]) * e + local[1][y]) * e + local[0][x];
+        std::memcpy(out + ((size_t(z) * edge_ + y) * edge_ + x) * texel_bytes_,
+                    texels[slot].data() + from * texel_bytes_, texel_bytes_);
+      }
+  return true;
+}
+
 glm::uvec3 BrickPool::slot_origin(uint32_t slot) const {
   const uint32_t x = slot % slots_.x, y = (slot / slots_.x) % slots_.y, z = slot / (slots_.x * slots_.y);
-  const uint32_t a = src_.apron();
+  const uint32_t a = apron_;
   return {x * edge_ + a, y * edge_ + a, z * edge_ + a};
 }
 
-glm::uvec3 BrickPool::touch(const ChunkKey& key) {
+glm::uvec3 BrickPool::touch(ChunkKey key) {
+  key.channel = 0;
   const uint32_t s = map_.at(key);
   slot_[s].last_used = frame_;
   return slot_origin(s);
@@ -99,40 +276,44 @@ Result<uint32_t> BrickPool::free_slot(UploadStats& stats) {
   return best;
 }
 
-Result<UploadStats> BrickPool::stage(
-    const std::vector<ChunkKey>& requests, uint64_t budget_bytes,
-    const std::function<Result<std::shared_ptr<const Chunk>>(const ChunkKey&)>& fetch,
-    std::vector<VkBufferImageCopy>& regions) {
+Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint64_t budget_bytes,
+                                     const ReadChunk& fetch, std::vector<std::vector<VkBufferImageCopy>>& regions) {
+  regions.assign(atlases_.size(), {});  // per atlas
   UploadStats st;
   uint64_t ring = 0;
-  for (const ChunkKey& key : requests) {
+  for (ChunkKey key : requests) {
+    key.channel = 0;
     if (resident(key)) continue;
     const bool over_budget = st.bricks > 0 && st.bytes + brick_bytes_ > budget_bytes;
     if (over_budget || ring + brick_bytes_ > staging_.size) {
       ++st.deferred;
       continue;
     }
-    VXR_ASSIGN_OR_RETURN(auto chunk, fetch(key));
-    if (!chunk) {  // streaming: not decoded yet
+    bool complete = true;
+    for (uint32_t c = 0; c < channels() && complete; ++c) {
+      ChunkKey ck = key;
+      ck.channel = channel_map_[c];
+      VXR_ASSIGN_OR_RETURN(complete,
+                           fill_slot_from(ck, static_cast<uint8_t*>(staging_.mapped) + ring + c * channel_bytes_, fetch));
+    }
+    if (!complete) {  // streaming: a chunk it needs is not decoded yet
       ++st.deferred;
       continue;
     }
-    if (chunk->edge != edge_ || chunk->data.size() != brick_bytes_)
-      return internal_error("brick pool: chunk level " + std::to_string(key.level) + " has edge " +
-                            std::to_string(chunk->edge) + ", expected " + std::to_string(edge_));
     auto slot = free_slot(st);
     if (!slot) {
       ++st.deferred;
       break;
     }
-    std::memcpy(static_cast<uint8_t*>(staging_.mapped) + ring, chunk->data.data(), brick_bytes_);
-    const glm::uvec3 o = slot_origin(*slot) - glm::uvec3(src_.apron());
-    VkBufferImageCopy r{};
-    r.bufferOffset = ring;
-    r.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    r.imageOffset = {int32_t(o.x), int32_t(o.y), int32_t(o.z)};
-    r.imageExtent = {edge_, edge_, edge_};
-    regions.push_back(r);
+    const glm::uvec3 o = slot_origin(*slot) - glm::uvec3(apron_);
+    for (uint32_t c = 0; c < channels(); ++c) {
+      VkBufferImageCopy r{};
+      r.bufferOffset = ring + c * channel_bytes_;
+      r.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+      r.imageOffset = {int32_t(o.x), int32_t(o.y), int32_t(o.z)};
+      r.imageExtent = {edge_, edge_, edge_};
+      regions[c].push_back(r);
+    }
     ring += (brick_bytes_ + 15) & ~uint64_t(15);
     slot_[*slot] = {key, frame_, false, true};
     map_[key] = *slot;
@@ -142,23 +323,26 @@ Result<UploadStats> BrickPool::stage(
   return st;
 }
 
-void BrickPool::record_copies(VkCommandBuffer cmd, const std::vector<VkBufferImageCopy>& regions) {
-  gpu::transition_image(cmd, atlas_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                        VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
-                        VK_ACCESS_2_TRANSFER_WRITE_BIT);
-  vkCmdCopyBufferToImage(cmd, staging_.buffer, atlas_.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                         static_cast<uint32_t>(regions.size()), regions.data());
-  gpu::transition_image(cmd, atlas_, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
-                        VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                        VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+void BrickPool::record_copies(VkCommandBuffer cmd, const std::vector<std::vector<VkBufferImageCopy>>& regions) {
+  for (uint32_t c = 0; c < channels(); ++c) {
+    gpu::Image& atlas = atlases_[c];
+    gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+                          VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    vkCmdCopyBufferToImage(cmd, staging_.buffer, atlas.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                           static_cast<uint32_t>(regions[c].size()), regions[c].data());
+    gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                          VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  }
 }
 
 Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uint64_t budget_bytes) {
   VXR_TRACE_SCOPE("brick_pool.upload");
-  std::vector<VkBufferImageCopy> regions;
+  std::vector<std::vector<VkBufferImageCopy>> regions;
   VXR_ASSIGN_OR_RETURN(UploadStats st,
                        stage(requests, budget_bytes, [this](const ChunkKey& k) { return src_.read(k); }, regions));
-  if (regions.empty()) return st;
+  if (st.bricks == 0) return st;
   VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_copies(cmd, regions); }));
   return st;
 }
@@ -166,23 +350,30 @@ Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uin
 Result<UploadStats> BrickPool::record_upload(VkCommandBuffer cmd, const std::vector<ChunkKey>& requests,
                                              uint64_t budget_bytes, const Fetch& fetch) {
   VXR_TRACE_SCOPE("brick_pool.record_upload");
-  std::vector<VkBufferImageCopy> regions;
+  std::vector<std::vector<VkBufferImageCopy>> regions;
   VXR_ASSIGN_OR_RETURN(UploadStats st, stage(requests, budget_bytes,
                                              [&](const ChunkKey& k) -> Result<std::shared_ptr<const Chunk>> {
                                                return fetch(k);
                                              },
                                              regions));
-  if (!regions.empty()) record_copies(cmd, regions);
+  if (st.bricks > 0) record_copies(cmd, regions);
   return st;
 }
 
-Status BrickPool::pin_top_level() {
+Status BrickPool::pin_top_level(uint32_t timepoint) {
+  if (timepoint >= src_.info().timepoints)
+    return invalid_argument("brick pool: timepoint " + std::to_string(timepoint) + " asked for, the volume has " +
+                            std::to_string(src_.info().timepoints));
   const uint32_t top = static_cast<uint32_t>(src_.levels().size()) - 1;
   const auto& li = src_.levels()[top];
   std::vector<ChunkKey> keys;
   for (uint32_t z = 0; z < li.chunk_counts[2]; ++z)
     for (uint32_t y = 0; y < li.chunk_counts[1]; ++y)
-      for (uint32_t x = 0; x < li.chunk_counts[0]; ++x) keys.push_back({top, x, y, z, 0, 0});
+      for (uint32_t x = 0; x < li.chunk_counts[0]; ++x) keys.push_back({top, x, y, z, 0, timepoint});
+  if (keys.size() > capacity() / 2)
+    return out_of_range("brick pool: the top level has " + std::to_string(keys.size()) +
+                        " chunks, too many to pin in " + std::to_string(capacity()) + " slots");
+  for (Slot& s : slot_) s.pinned = false;  // another timepoint's pins become ordinary bricks
   return pin(keys);
 }
 

@@ -1,15 +1,35 @@
-// GPU brick pool: a fixed 3D texture atlas of bricks (chunk payloads with
-// their apron) and the map from ChunkKey to atlas slot.
+// GPU brick pool: 3D texture atlases of bricks (chunk payloads with their
+// apron), one atlas per channel with the same slot layout, and the map from
+// ChunkKey (channel 0; the key names the brick, every channel comes with it)
+// to atlas slot.
 //
-// Everything Vulkan is allocated once at create(): the atlas, a staging ring
-// for uploads. Per frame the caller touches the bricks it draws (so they are
-// not evicted), then upload() reads requested bricks from the ChunkSource,
-// nearest first, within a byte budget, evicting the least recently used brick
-// not drawn this frame. The source's top level is pinned so the traversal
-// always has a resident ancestor to draw.
+// Texel formats follow the dense ray caster's, so both sample the same
+// values: u8 R8_UNORM, u16 R16_UNORM, every other dtype (i8, i16, u32, i32,
+// f32) R32_SFLOAT in data units, converted while filling the staging ring.
 //
-// Between uploads the atlas is in SHADER_READ_ONLY_OPTIMAL; an upload moves it
-// to TRANSFER_DST_OPTIMAL and back around its copies.
+// Apron: a slot holds the chunk with `apron` voxels around it. Gradients
+// (gradient opacity, isosurface normals) read +-1 voxel around a sample, so
+// trilinear filtering there reaches 2 voxels past the brick: the renderer asks
+// for apron 2. Where the source stores less (containers imported with the
+// default apron 1, procedural sources), the missing layers are filled from
+// the neighbouring chunks of the same level (the container's own clamp rule
+// at the volume border), so the slot equals what an apron-2 source would give.
+// That reads up to 26 neighbours per brick, so the pool does it only when
+// asked: a source that stores apron >= 2 costs nothing extra.
+//
+// Everything Vulkan is allocated once at create(): the atlases, a staging
+// ring for uploads. Per frame the caller touches the bricks it draws (so they
+// are not evicted), then upload() reads requested bricks from the
+// ChunkSource, nearest first, within a byte budget, evicting the least
+// recently used brick not drawn this frame. The source's top level (of the
+// timepoint drawn) is pinned so the traversal always has a resident ancestor.
+//
+// Streaming (vxr view): record_upload() takes chunks from a cache instead of
+// the source and records the copies into the frame's command buffer; a brick
+// is staged only when every chunk its slot is made of (slot_chunks) is there.
+//
+// Between uploads the atlases are in SHADER_READ_ONLY_OPTIMAL; an upload
+// moves them to TRANSFER_DST_OPTIMAL and back around its copies.
 #pragma once
 
 #include <functional>
@@ -27,20 +47,37 @@
 namespace vxr {
 
 struct BrickPoolOptions {
-  // Slots per atlas axis wanted; the atlas is slots * (chunk_size + 2 * apron)
-  // texels per axis. create() lowers them to fit maxImageDimension3D and the
-  // heap (fit_slots), so containers with wide chunks still draw.
-  glm::uvec3 slots{16, 16, 8};
-  uint64_t staging_bytes = 16ull << 20;  // the upload ring; bounds one frame's uploads (grown to one brick)
+  // Slots per atlas axis; the atlas is slots * (chunk_size + 2 * apron) texels
+  // per axis, checked against maxImageDimension3D and the memory heap.
+  // {0, 0, 0}: automatic, the largest grid up to 16 x 16 x 8 whose atlases
+  // (every channel, the dtype's texel size) fit in auto_atlas_bytes.
+  glm::uvec3 slots{0, 0, 0};
+  uint64_t auto_atlas_bytes = 1ull << 30;
+  uint64_t staging_bytes = 16ull << 20;  // the upload ring; bounds one frame's uploads
+  // Voxels around each brick in its slot: 0 = the source's; more than the
+  // source stores is filled from neighbouring chunks (see above). At most 4.
+  uint32_t apron = 0;
+  // Source channels to load, in the order the renderer numbers them (at most
+  // 4); empty = the source's first min(channels, 4).
+  std::vector<uint32_t> channels;
 };
 
-// Largest atlas create() makes: lavapipe has one 2 GiB heap; leave room for the rest.
+
+// Largest set of atlases create() makes: lavapipe has one 2 GiB heap; leave room for the rest.
 constexpr uint64_t kMaxAtlasBytes = (1ull << 31) - (64ull << 20);
 
 // `wanted` slots per axis lowered until every side fits max_dim texels and the
-// atlas fits max_bytes. kOutOfRange when not even one brick fits.
+// atlases fit max_bytes (texel_bytes: all channels of one texel). kOutOfRange
+// when not even one brick fits.
 Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_bytes, uint32_t max_dim,
                              uint64_t max_bytes);
+
+// The atlas texel format for a dtype (see above) and data units per texel
+// unit: 255 (u8, UNORM), 65535 (u16, UNORM), 1 (float texels).
+VkFormat brick_texel_format(DType dtype);
+double brick_value_scale(DType dtype);
+// `n` native voxels -> atlas texels of brick_texel_format(dtype).
+void convert_to_texels(DType dtype, const uint8_t* in, size_t n, uint8_t* out);
 
 struct UploadStats {
   uint32_t bricks = 0;
@@ -56,31 +93,53 @@ class BrickPool {
 
   // Starts a frame: bricks touched from now on are protected from eviction.
   void begin_frame() { ++frame_; }
-  bool resident(const ChunkKey& key) const { return map_.count(key) != 0; }
+  // Keys name bricks: their channel is ignored (a brick carries every channel).
+  bool resident(ChunkKey key) const {
+    key.channel = 0;
+    return map_.count(key) != 0;
+  }
   // Marks a resident brick as used this frame; returns its interior origin in atlas texels.
-  glm::uvec3 touch(const ChunkKey& key);
+  glm::uvec3 touch(ChunkKey key);
 
-  // Loads and uploads the top level and pins it (call once, before frames).
-  Status pin_top_level();
-  // Loads, uploads and pins `keys` (at most half the slots), before frames.
+  // Loads and uploads the top level of `timepoint` and pins it; pins of other
+  // timepoints (and pin() calls) are released (they become ordinary LRU bricks).
+  Status pin_top_level(uint32_t timepoint = 0);
+  // Loads, uploads and pins `keys` (at most half the slots) in addition to
+  // what is pinned, outside a frame's recording (it waits for its copies).
   Status pin(const std::vector<ChunkKey>& keys);
   // Uploads requested bricks in order until `budget_bytes` (at least one brick
   // per call) or the ring is used up. Waits for the copies.
   Result<UploadStats> upload(const std::vector<ChunkKey>& requests, uint64_t budget_bytes);
 
   // Streaming form of upload(): chunks come from `fetch` (nullptr: not loaded
-  // yet, skipped and counted as deferred) and the copies are recorded into
-  // `cmd`, ahead of the frame's rays. The staging ring is reused: the
-  // command buffer of the previous call must have completed.
+  // yet; the brick is skipped and counted as deferred) and the copies are
+  // recorded into `cmd`, ahead of the frame's rays. The staging ring is
+  // reused: the command buffer of the previous call must have completed.
   using Fetch = std::function<std::shared_ptr<const Chunk>(const ChunkKey&)>;
   Result<UploadStats> record_upload(VkCommandBuffer cmd, const std::vector<ChunkKey>& requests, uint64_t budget_bytes,
                                     const Fetch& fetch);
+  // The chunks (source keys: every drawn channel and, when the slot's apron is
+  // wider than the source's, the neighbours it is filled from) that the slot
+  // of `brick` is made of: what a streaming caller must have loaded.
+  void slot_chunks(ChunkKey brick, std::vector<ChunkKey>& out) const;
 
-  const gpu::Image& atlas() const { return atlas_; }
-  glm::uvec3 atlas_texels() const { return {atlas_.extent.width, atlas_.extent.height, atlas_.extent.depth}; }
+  // One atlas per drawn channel (channels() of them); source_channel(i) is what atlas i holds.
+  // One channel of `key` (key.channel is the source's) as slot texels: edge^3
+  // in the atlas format, edge = chunk_size + 2 * apron(). What upload() copies.
+  Status fill_slot(const ChunkKey& key, uint8_t* out) const;
+  uint32_t slot_edge() const { return edge_; }
+  uint32_t texel_bytes() const { return texel_bytes_; }
+
+  const gpu::Image& atlas(uint32_t channel = 0) const { return atlases_[channel]; }
+  uint32_t channels() const { return static_cast<uint32_t>(atlases_.size()); }
+  uint32_t source_channel(uint32_t i) const { return channel_map_[i]; }
+  uint32_t apron() const { return apron_; }
+  glm::uvec3 atlas_texels() const {
+    return {atlases_[0].extent.width, atlases_[0].extent.height, atlases_[0].extent.depth};
+  }
   uint32_t capacity() const { return uint32_t(slots_.x) * slots_.y * slots_.z; }
   uint32_t used() const { return static_cast<uint32_t>(map_.size()); }
-  uint64_t brick_bytes() const { return brick_bytes_; }
+  uint64_t brick_bytes() const { return brick_bytes_; }  // one brick, every channel
 
  private:
   struct Slot {
@@ -91,25 +150,30 @@ class BrickPool {
   };
   BrickPool(gpu::Context& ctx, const ChunkSource& src) : ctx_(ctx), src_(src) {}
   Result<uint32_t> free_slot(UploadStats& stats);
-  // Copies requested chunks into the staging ring and assigns their slots;
-  // the regions still have to be copied into the atlas (record_copies).
-  Result<UploadStats> stage(const std::vector<ChunkKey>& requests, uint64_t budget_bytes,
-                            const std::function<Result<std::shared_ptr<const Chunk>>(const ChunkKey&)>& fetch,
-                            std::vector<VkBufferImageCopy>& regions);
-  void record_copies(VkCommandBuffer cmd, const std::vector<VkBufferImageCopy>& regions);
+  // A chunk by key; a null chunk: not loaded yet.
+  using ReadChunk = std::function<Result<std::shared_ptr<const Chunk>>(const ChunkKey&)>;
+  // fill_slot with chunks from `fetch`; false when one of them is not loaded yet.
+  Result<bool> fill_slot_from(const ChunkKey& key, uint8_t* out, const ReadChunk& fetch) const;
+  // Fills requested bricks (every channel) into the staging ring and assigns
+  // their slots; the regions (per atlas) still have to be copied (record_copies).
+  Result<UploadStats> stage(const std::vector<ChunkKey>& requests, uint64_t budget_bytes, const ReadChunk& fetch,
+                            std::vector<std::vector<VkBufferImageCopy>>& regions);
+  void record_copies(VkCommandBuffer cmd, const std::vector<std::vector<VkBufferImageCopy>>& regions);
   glm::uvec3 slot_origin(uint32_t slot) const;
 
   gpu::Context& ctx_;
   const ChunkSource& src_;
   glm::uvec3 slots_{0};
-  uint32_t edge_ = 0;
+  uint32_t edge_ = 0, apron_ = 0;
   uint32_t texel_bytes_ = 1;
+  uint64_t channel_bytes_ = 0;  // one brick, one channel
   uint64_t brick_bytes_ = 0;
-  gpu::Image atlas_;
+  std::vector<gpu::Image> atlases_;
+  std::vector<uint32_t> channel_map_;
   gpu::Buffer staging_;
   std::vector<Slot> slot_;
   std::vector<uint32_t> free_;
-  std::unordered_map<ChunkKey, uint32_t, ChunkKeyHash> map_;
+  std::unordered_map<ChunkKey, uint32_t, ChunkKeyHash> map_;  // keys with channel 0
   uint64_t frame_ = 1;
 };
 

@@ -16,7 +16,7 @@ namespace {
 
 std::vector<VkDescriptorSetLayoutBinding> bindings() {
   return {
-      {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VXR_MAX_CHANNELS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // one atlas per channel
       {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
@@ -106,42 +106,61 @@ std::string format_stats(const BrickFrameStats& s) {
   return buf;
 }
 
-Status check_brick_settings(const RenderSettings& s) {
+Status check_brick_settings(const RenderSettings& s, uint32_t channels) {
   auto no = [](const std::string& what) {
     return invalid_argument("render settings: " + what +
-                            " is not drawn by the out-of-core renderer (one channel; ea, emission or mip); "
-                            "use the dense renderer (vxr render --renderer dense)");
+                            " is not drawn by the out-of-core renderer (its samples sit at segment midpoints on a "
+                            "grid every brick shares); use the dense renderer (vxr render --renderer dense)");
   };
-  if (s.model != OpticalModel::kEmissionAbsorption && s.model != OpticalModel::kEmission &&
-      s.model != OpticalModel::kMip)
-    return no(std::string("model '") + optical_model_name(s.model) + "'");
   if (s.channels.empty()) return invalid_argument("render settings: no channel settings");
-  if (s.gradient_opacity.enabled) return no("'gradient_opacity'");
-  if (s.depth_color != DepthColorMode::kOff) return no("'depth_color'");
   if (s.jitter) return no("'jitter'");
   if (s.sample_offset != 0.5) return no("'sample_offset' " + std::to_string(s.sample_offset));
-  for (size_t i = 1; i < s.channels.size(); ++i)
-    if (s.channels[i].enabled) return no("a second channel");
-  return validate_render_settings(s, 1);
+  return validate_render_settings(s, channels);
+}
+
+namespace {
+double windowed(const ChannelSettings& c, double v) {
+  const double x = std::clamp((v - c.window_lo) / (c.window_hi - c.window_lo), 0.0, 1.0);
+  return c.gamma == 1.0 ? x : std::pow(x, c.gamma);
+}
+}  // namespace
+
+bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, std::span<const ChunkStats> ranges) {
+  // Average and iso never skip (see the header); the others test each enabled channel.
+  if (s.model == OpticalModel::kAverage || s.model == OpticalModel::kIsosurface) return true;
+  const int n = VXR_TF_SIZE - 1;
+  for (size_t c = 0; c < ranges.size() && c < s.channels.size(); ++c) {
+    const ChannelSettings& ch = s.channels[c];
+    if (!ch.enabled) continue;
+    const double x0 = windowed(ch, ranges[c].min), x1 = windowed(ch, ranges[c].max);  // monotonic
+    if (s.model == OpticalModel::kMip) {
+      if (x1 > 0.0 || table.at(int(c), 0).a > 0.0) return true;
+    } else if (s.model == OpticalModel::kMinIp) {
+      if (x0 < 1.0 || table.at(int(c), n).a > 0.0) return true;
+    } else {
+      // vxr_transfer_table mixes entries floor(u) and floor(u) + 1, u = x * 255.
+      const int i0 = std::clamp(int(std::floor(x0 * n)), 0, n), i1 = std::clamp(int(std::ceil(x1 * n)), 0, n);
+      for (int i = i0; i <= i1; ++i)
+        if (table.at(int(c), i).a > 0.0) return true;
+    }
+  }
+  return false;
 }
 
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, double lo, double hi) {
-  const ChannelSettings& c = s.channels[0];
-  auto windowed = [&](double v) {
-    const double x = std::clamp((v - c.window_lo) / (c.window_hi - c.window_lo), 0.0, 1.0);
-    return c.gamma == 1.0 ? x : std::pow(x, c.gamma);
-  };
-  const double x0 = windowed(lo), x1 = windowed(hi);  // monotonic: the range's image
-  // MIP: values at windowed 0 never raise the running maximum, but a ray that
-  // took samples shows the table at its maximum, and one that took none shows
-  // nothing: the two agree only where entry 0 has zero opacity.
-  if (s.model == OpticalModel::kMip) return x1 > 0.0 || table.at(0, 0).a > 0.0;
-  if (s.model != OpticalModel::kEmissionAbsorption && s.model != OpticalModel::kEmission) return true;
-  // vxr_transfer_table mixes entries floor(u) and floor(u) + 1, u = x * 255.
-  const int n = VXR_TF_SIZE - 1;
-  const int i0 = std::clamp(int(std::floor(x0 * n)), 0, n), i1 = std::clamp(int(std::ceil(x1 * n)), 0, n);
-  for (int i = i0; i <= i1; ++i)
-    if (table.at(0, i).a > 0.0) return true;
+  const ChunkStats r{lo, hi};
+  return brick_may_contribute(s, table, std::span(&r, 1));
+}
+
+bool brick_state_fits_texel(const RenderSettings& s, uint32_t channels) {
+  switch (s.model) {
+    case OpticalModel::kEmissionAbsorption: return channels == 1 || s.blend == ChannelBlend::kComposite;
+    case OpticalModel::kEmission:
+    case OpticalModel::kIsosurface: return true;
+    case OpticalModel::kMip:
+    case OpticalModel::kMinIp: return channels == 1;
+    case OpticalModel::kAverage: return channels <= 3;
+  }
   return false;
 }
 
@@ -150,8 +169,8 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   std::unique_ptr<BrickRenderer> r(new BrickRenderer(ctx, source));
   r->opt_ = options;
   if (source.apron() < 1) return invalid_argument("brick renderer: chunks need an apron of at least 1 voxel");
-  r->value_scale_ = source.info().dtype == DType::kU16 ? 65535.0 : 255.0;
   VXR_ASSIGN_OR_RETURN(r->pool_, BrickPool::create(ctx, source, options.pool));
+  r->value_scales_.assign(r->pool_->channels(), brick_value_scale(source.info().dtype));
   const auto b = bindings();
   VXR_ASSIGN_OR_RETURN(r->pipeline_,
                        gpu::create_compute_pipeline(ctx, {"brick_raycast.comp", b, sizeof(shader::BrickCastParams),
@@ -186,7 +205,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   std::vector<VkDescriptorSet> all = r->view_sets_;
   all.push_back(r->mono_set_);
   for (VkDescriptorSet set : all) {
-    if (set != r->mono_set_) gpu::write_combined_image(ctx, set, 0, r->pool_->atlas().view, r->linear_);
+    if (set != r->mono_set_) r->bind_atlases(set, r->pool_atlases());
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
     // The core reads the table with texelFetch: the sampler's filter is unused.
     gpu::write_combined_image(ctx, set, 1, r->transfer_tex_.view, r->linear_);
@@ -195,19 +214,23 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   gpu::write_storage_buffer(ctx, r->mono_set_, 6, r->items_.buffer);
   gpu::write_uniform_buffer(ctx, r->mono_set_, 7, r->params_.buffer, sizeof(shader::RaycastParams));
   VXR_RETURN_IF_ERROR(r->ensure_target(1, 1));  // the storage binding needs an image even when views blit
-  VXR_RETURN_IF_ERROR(r->pool_->pin_top_level());
-  if (options.preload_if_fits) {
-    std::vector<ChunkKey> keys;
-    for (uint32_t l = 0; l < source.levels().size(); ++l) {
-      const LevelInfo& li = source.levels()[l];
-      for (uint32_t z = 0; z < li.chunk_counts[2]; ++z)
-        for (uint32_t y = 0; y < li.chunk_counts[1]; ++y)
-          for (uint32_t x = 0; x < li.chunk_counts[0] && keys.size() <= r->pool_->capacity() / 2; ++x)
-            keys.push_back({l, x, y, z, 0, 0});
-    }
-    if (keys.size() <= r->pool_->capacity() / 2) VXR_RETURN_IF_ERROR(r->pool_->pin(keys));
-  }
+  VXR_RETURN_IF_ERROR(r->pin_resident(0));
   return r;
+}
+
+Status BrickRenderer::pin_resident(uint32_t timepoint) {
+  VXR_RETURN_IF_ERROR(pool_->pin_top_level(timepoint));
+  if (!opt_.preload_if_fits) return Status::ok();
+  std::vector<ChunkKey> keys;
+  for (uint32_t l = 0; l < src_.levels().size(); ++l) {
+    const LevelInfo& li = src_.levels()[l];
+    for (uint32_t z = 0; z < li.chunk_counts[2]; ++z)
+      for (uint32_t y = 0; y < li.chunk_counts[1]; ++y)
+        for (uint32_t x = 0; x < li.chunk_counts[0] && keys.size() <= pool_->capacity() / 2; ++x)
+          keys.push_back({l, x, y, z, 0, timepoint});
+  }
+  if (keys.size() <= pool_->capacity() / 2) VXR_RETURN_IF_ERROR(pool_->pin(keys));
+  return Status::ok();
 }
 
 VolumePlacement BrickRenderer::placement() const {
@@ -270,19 +293,90 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
   return Status::ok();
 }
 
-Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s) {
-  const uint32_t model = s.model == OpticalModel::kMip        ? VXR_MODEL_MIP
-                         : s.model == OpticalModel::kEmission ? VXR_MODEL_EMISSION
-                                                              : VXR_MODEL_EMISSION_ABSORPTION;
+Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model) {
   // Specialised like the dense ray caster's (raycast_core.glsl ids 100..105).
-  const bool gamma = s.channels[0].gamma != 1.0, naive = !s.opacity_correction;
-  if (model == VXR_MODEL_EMISSION_ABSORPTION && !gamma && !naive) return &pipeline_;
-  const uint32_t key = model | (gamma ? 1u << 4 : 0u) | (naive ? 1u << 5 : 0u);
+  const uint32_t n = channels();
+  const bool gradient = s.gradient_opacity.enabled, depth = s.depth_color != DepthColorMode::kOff;
+  bool gamma = false;
+  for (uint32_t c = 0; c < n && c < s.channels.size(); ++c) gamma = gamma || s.channels[c].gamma != 1.0;
+  const bool naive = !s.opacity_correction;
+  if (model == VXR_MODEL_EMISSION_ABSORPTION && n == 1 && !gradient && !depth && !gamma && !naive) return &pipeline_;
+  const uint32_t key = model | (n << 4) | (gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u) |
+                       (gamma ? 1u << 10 : 0u) | (naive ? 1u << 11 : 0u);
   if (auto it = pipelines_.find(key); it != pipelines_.end()) return &it->second;
   VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p,
                        gpu::create_compute_pipeline(ctx_, {"brick_raycast.comp", bindings(), sizeof(shader::BrickCastParams),
-                                                           {{100, model}, {104, gamma ? 1u : 0u}, {105, naive ? 1u : 0u}}}));
+                                                           {{100, model},
+                                                            {101, n},
+                                                            {102, gradient ? 1u : 0u},
+                                                            {103, depth ? 1u : 0u},
+                                                            {104, gamma ? 1u : 0u},
+                                                            {105, naive ? 1u : 0u}}}));
   return &pipelines_.emplace(key, std::move(p)).first->second;
+}
+
+std::vector<const gpu::Image*> BrickRenderer::pool_atlases() const {
+  std::vector<const gpu::Image*> out;
+  for (uint32_t c = 0; c < pool_->channels(); ++c) out.push_back(&pool_->atlas(c));
+  return out;
+}
+
+void BrickRenderer::bind_atlases(VkDescriptorSet set, const std::vector<const gpu::Image*>& atlases) {
+  // Slots past the drawn channels repeat channel 0's (never read: the shader
+  // is specialised for the channel count).
+  VkDescriptorImageInfo infos[VXR_MAX_CHANNELS];
+  for (size_t c = 0; c < VXR_MAX_CHANNELS; ++c)
+    infos[c] = {linear_, atlases[c < atlases.size() ? c : 0]->view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  w.dstSet = set;
+  w.dstBinding = 0;
+  w.descriptorCount = VXR_MAX_CHANNELS;
+  w.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  w.pImageInfo = infos;
+  vkUpdateDescriptorSets(ctx_.device(), 1, &w, 0, nullptr);
+}
+
+namespace {
+// Gradient opacity and the isosurface normal read +-1 voxel around a sample.
+bool needs_gradients(const RenderSettings& s) {
+  return s.gradient_opacity.enabled || s.model == OpticalModel::kIsosurface;
+}
+}  // namespace
+
+Status BrickRenderer::prepare(const RenderSettings& s) {
+  if (!needs_gradients(s) || pool_->apron() >= 2) return Status::ok();
+  return rebuild_pool(2);
+}
+
+Status BrickRenderer::rebuild_pool(uint32_t apron) {
+  // Once per renderer: the bricks are loaded again with the wider apron. The
+  // old atlases may still be read by a submitted frame, and every view's set
+  // names them: wait for the device, then replace and rebind. Callers run
+  // this before any of this frame's commands are recorded (prepare,
+  // begin_frame), so no recording command buffer has bound a set yet.
+  BrickPoolOptions po = opt_.pool;
+  po.apron = apron;
+  po.channels.clear();
+  for (uint32_t c = 0; c < pool_->channels(); ++c) po.channels.push_back(pool_->source_channel(c));
+  if (VkResult vr = vkDeviceWaitIdle(ctx_.device()); vr != VK_SUCCESS)
+    return internal_error("brick renderer: vkDeviceWaitIdle failed (" + std::to_string(int(vr)) + ")");
+  pool_.reset();
+  VXR_ASSIGN_OR_RETURN(pool_, BrickPool::create(ctx_, src_, po));
+  opt_.pool = po;
+  for (VkDescriptorSet set : view_sets_) bind_atlases(set, pool_atlases());
+  // Requested bricks are keyed the same; the new pool has none of them yet.
+  return pin_resident(pinned_timepoint_);
+}
+
+Status BrickRenderer::ensure_timepoint(uint32_t timepoint) {
+  if (timepoint >= src_.info().timepoints)
+    return invalid_argument("render: timepoint " + std::to_string(timepoint) + " asked for, the volume has " +
+                            std::to_string(src_.info().timepoints) + " (0.." +
+                            std::to_string(src_.info().timepoints - 1) + ")");
+  if (timepoint == pinned_timepoint_) return Status::ok();
+  VXR_RETURN_IF_ERROR(pin_resident(timepoint));
+  pinned_timepoint_ = timepoint;
+  return Status::ok();
 }
 
 void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
@@ -311,11 +405,11 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
   std::memcpy(out, &r, sizeof(r));
 }
 
-Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t w,
-                                  uint32_t h, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
-                                  const std::vector<glm::uvec2>& waves, const RenderTarget& target,
+Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
+                                  uint32_t w, uint32_t h, uint32_t bricks, const glm::uvec3& atlas_texels,
+                                  BrickPassMode mode, const std::vector<glm::uvec2>& waves, const RenderTarget& target,
                                   uint32_t* dispatches_out) {
-  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s));
+  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model));
   // RGBA8 UNORM with a storage view: the rays write it. Anything else (BGRA,
   // sRGB, float, no storage usage): final float pixels go to the
   // accumulation image and one blit converts them into the target's format.
@@ -531,6 +625,15 @@ Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const 
 
 Status BrickRenderer::begin_frame(VkCommandBuffer cmd, const BrickFrameSettings& frame) {
   VXR_TRACE_SCOPE("brick_renderer.begin_frame");
+  // Pool changes first, before this frame records anything: a rebuild waits
+  // for the device and rebinds the sets; a new timepoint's pins are uploaded
+  // through the staging ring this frame's copies then reuse.
+  if (apron_wanted_ > pool_->apron()) {
+    VXR_RETURN_IF_ERROR(rebuild_pool(apron_wanted_));
+    pending_.clear();
+  }
+  apron_wanted_ = 0;
+  VXR_RETURN_IF_ERROR(ensure_timepoint(frame.lod.timepoint));
   retired_.clear();  // the caller waited for the frame that used them
   views_ = 0;
   table_used_ = items_used_ = 0;
@@ -565,10 +668,16 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
       rect.offset.y + height > target.extent.height)
     return invalid_argument("render: the view's rectangle lies outside its target image");
   if (!(s.step_voxels > 0.0)) return invalid_argument("render: step must be > 0 voxels");
-  VXR_RETURN_IF_ERROR(check_brick_settings(s));
+  VXR_RETURN_IF_ERROR(check_brick_settings(s, channels()));
+  if (frame.lod.timepoint != pinned_timepoint_)
+    return invalid_argument("record_view: timepoint " + std::to_string(frame.lod.timepoint) +
+                            " differs from the frame's (begin_frame pinned " + std::to_string(pinned_timepoint_) + ")");
   if (views_ >= opt_.max_views)
     return out_of_range("render: more than " + std::to_string(opt_.max_views) +
                         " views in one frame; raise BrickRendererOptions::max_views");
+  // Gradients want an apron of 2; the pool is rebuilt at the next begin_frame
+  // (prepare() does it before the first frame), this view reads what it has.
+  if (needs_gradients(s) && pool_->apron() < 2) apron_wanted_ = 2;
   const TransferTable tf = build_transfer_table(s);
   VXR_RETURN_IF_ERROR(record_transfer(cmd, tf));
   VXR_RETURN_IF_ERROR(ensure_accum(width, height));
@@ -577,7 +686,17 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
 
   auto t0 = std::chrono::steady_clock::now();
   LodQueries q;
-  q.visible = [&](double lo, double hi) { return brick_may_contribute(s, tf, lo, hi); };
+  ChunkStats ranges[VXR_MAX_CHANNELS];
+  q.visible = [&](const ChunkKey& key) {
+    for (uint32_t c = 0; c < channels(); ++c) {
+      ChunkKey k = key;
+      k.channel = pool_->source_channel(c);
+      auto r = src_.stats(k);
+      if (!r) return true;  // unknown: draw it
+      ranges[c] = *r;
+    }
+    return brick_may_contribute(s, tf, std::span(ranges, channels()));
+  };
   q.resident = [this](const ChunkKey& k) { return pool_->resident(k); };
   LodResult lod = traverse_lod(src_, view, frame.lod, q);
   st.traverse_ms = ms_since(t0);
@@ -597,9 +716,11 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     fill_record(static_cast<uint8_t*>(table_.mapped) + table_base + i * sizeof(shader::BrickRecord), lod.draw[i],
                 glm::vec3(o), view, frame.lod);
   }
-  const BrickPassMode mode = frame.mode != BrickPassMode::kAuto ? frame.mode
-                             : ctx_.info().is_cpu()             ? BrickPassMode::kMultipass
-                                                                : BrickPassMode::kTiled;
+  BrickPassMode mode = frame.mode != BrickPassMode::kAuto ? frame.mode
+                       : ctx_.info().is_cpu()             ? BrickPassMode::kMultipass
+                                                          : BrickPassMode::kTiled;
+  // Waves carry a ray's state in one RGBA32F texel; larger states march tiled.
+  if (mode == BrickPassMode::kMultipass && !brick_state_fits_texel(s, channels())) mode = BrickPassMode::kTiled;
   const VkDeviceSize items_base = align_up(items_used_, salign);
   const size_t items_capacity = items_base < items_.size ? (items_.size - items_base) / sizeof(glm::uvec4) : 0;
   auto* items_dst = reinterpret_cast<glm::uvec4*>(static_cast<uint8_t*>(items_.mapped) + items_base);
@@ -615,8 +736,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;
   st.hit_rate = wanted ? double(lod.stats.drawn - lod.stats.fallback) / double(wanted) : 1.0;
 
-  const double scale[1] = {value_scale_};
-  const shader::RaycastParams params = pack_params(plan_raycast(camera, s, placement(), scale, width, height), false);
+  const shader::RaycastParams params =
+      pack_params(plan_raycast(camera, s, placement(), value_scales_, width, height), false);
   const VkDeviceSize params_offset = VkDeviceSize(views_) * params_stride_;
   std::memcpy(static_cast<uint8_t*>(params_.mapped) + params_offset, &params, sizeof(params));
 
@@ -627,7 +748,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   gpu::write_storage_buffer(ctx_, set, 4, table_.buffer, table_bytes, table_base);
   gpu::write_storage_buffer(ctx_, set, 6, items_.buffer, items_bytes, items_base);
   gpu::write_uniform_buffer(ctx_, set, 7, params_.buffer, sizeof(shader::RaycastParams), params_offset);
-  VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, width, height, static_cast<uint32_t>(lod.draw.size()),
+  VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),
                                   pool_->atlas_texels(), mode, waves, target, &st.dispatches));
   ++views_;
   table_used_ = table_base + table_bytes;
@@ -636,8 +757,11 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   // Missing bricks: streaming asks the loader threads (nearest first, this
   // frame before older ones); otherwise render() reads them after the frame.
   if (ChunkCache* cache = opt_.stream_from) {
+    std::vector<ChunkKey> chunks;
     for (size_t i = 0; i < lod.requests.size(); ++i) {
-      cache->request(lod.requests[i], double(frame_number_) * 1e7 - double(i));
+      chunks.clear();
+      pool_->slot_chunks(lod.requests[i], chunks);  // every channel, and neighbours for a wider apron
+      for (const ChunkKey& k : chunks) cache->request(k, double(frame_number_) * 1e7 - double(i));
       pending_.push_back(lod.requests[i]);
     }
     st.bricks_uploaded = last_upload_.bricks;
@@ -655,6 +779,8 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
                                          BrickFrameStats* stats_out) {
   VXR_TRACE_SCOPE("brick_renderer.render");
   if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
+  VXR_RETURN_IF_ERROR(check_brick_settings(s, channels()));
+  VXR_RETURN_IF_ERROR(prepare(s));
   VXR_RETURN_IF_ERROR(ensure_target(width, height));
   BrickFrameStats st;
   Status recorded = Status::ok();
@@ -682,39 +808,52 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
   return img;
 }
 
-Status BrickRenderer::set_monolithic(uint32_t level) {
+Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
   if (level >= src_.levels().size()) return invalid_argument("monolithic: no level " + std::to_string(level));
-  if (level == mono_level_) return Status::ok();
+  if (timepoint >= src_.info().timepoints)
+    return invalid_argument("monolithic: no timepoint " + std::to_string(timepoint));
+  if (level == mono_level_ && timepoint == mono_timepoint_) return Status::ok();
   const LevelInfo& li = src_.levels()[level];
   const uint32_t max3d = ctx_.limits().maxImageDimension3D;
   for (uint64_t d : li.dims)
     if (d > max3d)
       return out_of_range("monolithic: level " + std::to_string(level) + " has a side of " + std::to_string(d) +
                           " voxels, past the device's 3D texture limit of " + std::to_string(max3d));
-  const uint32_t tb = src_.info().dtype == DType::kU16 ? 2 : 1;
+  const DType dtype = src_.info().dtype;
+  const VkFormat format = brick_texel_format(dtype);
+  const uint32_t sb = dtype_bytes(dtype), tb = gpu::format_texel_bytes(format);
   const uint64_t nx = li.dims[0], ny = li.dims[1], nz = li.dims[2];
-  std::vector<uint8_t> dense(nx * ny * nz * tb);
   const uint32_t cs = src_.chunk_size(), a = src_.apron(), e = cs + 2 * a;
-  for (uint32_t cz = 0; cz < li.chunk_counts[2]; ++cz)
-    for (uint32_t cy = 0; cy < li.chunk_counts[1]; ++cy)
-      for (uint32_t cx = 0; cx < li.chunk_counts[0]; ++cx) {
-        VXR_ASSIGN_OR_RETURN(auto chunk, src_.read({level, cx, cy, cz, 0, 0}));
-        for (uint32_t z = 0; z < cs && uint64_t(cz) * cs + z < nz; ++z)
-          for (uint32_t y = 0; y < cs && uint64_t(cy) * cs + y < ny; ++y) {
-            const uint64_t gx = uint64_t(cx) * cs, gy = uint64_t(cy) * cs + y, gz = uint64_t(cz) * cs + z;
-            const uint64_t n = std::min<uint64_t>(cs, nx - gx);
-            std::memcpy(&dense[((gz * ny + gy) * nx + gx) * tb],
-                        &chunk->data[((uint64_t(z + a) * e + (y + a)) * e + a) * tb], n * tb);
-          }
-      }
-  const VkFormat format = tb == 2 ? VK_FORMAT_R16_UNORM : VK_FORMAT_R8_UNORM;
-  VXR_ASSIGN_OR_RETURN(mono_tex_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_3D, format,
-                                                           {uint32_t(nx), uint32_t(ny), uint32_t(nz)},
-                                                           VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                                           "monolithic volume"}));
-  VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, mono_tex_, dense.data(), dense.size()));
-  gpu::write_combined_image(ctx_, mono_set_, 0, mono_tex_.view, linear_);
+  std::vector<gpu::Image> textures;
+  for (uint32_t c = 0; c < channels(); ++c) {
+    std::vector<uint8_t> dense(nx * ny * nz * sb);  // native voxels, then converted like the pool's
+    for (uint32_t cz = 0; cz < li.chunk_counts[2]; ++cz)
+      for (uint32_t cy = 0; cy < li.chunk_counts[1]; ++cy)
+        for (uint32_t cx = 0; cx < li.chunk_counts[0]; ++cx) {
+          VXR_ASSIGN_OR_RETURN(auto chunk, src_.read({level, cx, cy, cz, pool_->source_channel(c), timepoint}));
+          for (uint32_t z = 0; z < cs && uint64_t(cz) * cs + z < nz; ++z)
+            for (uint32_t y = 0; y < cs && uint64_t(cy) * cs + y < ny; ++y) {
+              const uint64_t gx = uint64_t(cx) * cs, gy = uint64_t(cy) * cs + y, gz = uint64_t(cz) * cs + z;
+              const uint64_t n = std::min<uint64_t>(cs, nx - gx);
+              std::memcpy(&dense[((gz * ny + gy) * nx + gx) * sb],
+                          &chunk->data[((uint64_t(z + a) * e + (y + a)) * e + a) * sb], n * sb);
+            }
+        }
+    std::vector<uint8_t> texels(nx * ny * nz * tb);
+    convert_to_texels(dtype, dense.data(), nx * ny * nz, texels.data());
+    VXR_ASSIGN_OR_RETURN(gpu::Image tex,
+                         gpu::create_image(ctx_, {VK_IMAGE_TYPE_3D, format, {uint32_t(nx), uint32_t(ny), uint32_t(nz)},
+                                                  VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                                  "monolithic volume"}));
+    VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, tex, texels.data(), texels.size()));
+    textures.push_back(std::move(tex));
+  }
+  mono_tex_ = std::move(textures);
+  std::vector<const gpu::Image*> views;
+  for (const gpu::Image& t : mono_tex_) views.push_back(&t);
+  bind_atlases(mono_set_, views);
   mono_level_ = level;
+  mono_timepoint_ = timepoint;
   return Status::ok();
 }
 
@@ -724,7 +863,7 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
   VXR_TRACE_SCOPE("brick_renderer.render_monolithic");
   if (mono_level_ == UINT32_MAX) return invalid_argument("render_monolithic: call set_monolithic first");
   if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
-  VXR_RETURN_IF_ERROR(check_brick_settings(s));
+  VXR_RETURN_IF_ERROR(check_brick_settings(s, channels()));
   VXR_RETURN_IF_ERROR(ensure_target(width, height));
   VXR_RETURN_IF_ERROR(ensure_accum(width, height));
   const LodView view = view_for(camera, width, height);
@@ -752,20 +891,22 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
   }
   BrickFrameStats st;
   st.lod.drawn = 1;
-  const double scale[1] = {value_scale_};
-  const shader::RaycastParams params = pack_params(plan_raycast(camera, s, placement(), scale, width, height), false);
+  const shader::RaycastParams params =
+      pack_params(plan_raycast(camera, s, placement(), value_scales_, width, height), false);
   const RenderTarget target{target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL};
   Status recorded = Status::ok();
   const auto t0 = std::chrono::steady_clock::now();
   VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-    recorded = begin_frame(cmd, {});
+    BrickFrameSettings frame;  // the pool's timepoint stays as it is (the texture has its own)
+    frame.lod.timepoint = pinned_timepoint_;
+    recorded = begin_frame(cmd, frame);
     if (recorded) recorded = record_transfer(cmd, build_transfer_table(s));
     if (!recorded) return;
     std::memcpy(table_.mapped, &r, sizeof(r));
     std::memcpy(params_.mapped, &params, sizeof(params));
     gpu::write_storage_image(ctx_, mono_set_, 2, target_.view);
     gpu::write_storage_image(ctx_, mono_set_, 3, accum_.view);
-    recorded = record_cast(cmd, mono_set_, s, width, height, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
+    recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
                            BrickPassMode::kSinglePass, {}, target, &st.dispatches);
   }));
   VXR_RETURN_IF_ERROR(recorded);

@@ -28,9 +28,13 @@
 // Classification and compositing are the dense ray caster's GLSL core
 // (shaders_glsl/include/raycast_core.glsl) with the same RaycastParams and
 // transfer table; see check_brick_settings for what the brick path draws.
+// The timepoint is the frame's (BrickFrameSettings::lod.timepoint, pinned by
+// begin_frame, so every view of a frame shares it); channels are the pool's
+// (BrickPoolOptions::channels).
 #pragma once
 
 #include <map>
+#include <span>
 #include <memory>
 #include <tuple>
 #include <vector>
@@ -69,23 +73,39 @@ struct BrickRendererOptions {
 };
 
 // The brick shader classifies and composites with the dense ray caster's
-// core (raycast_core.glsl): one channel, emission-absorption, emission or
-// MIP, any transfer function (window, gamma, colormap or colour points,
-// opacity points), samples at segment midpoints. What it cannot do (other
-// models, more channels, gradient opacity, depth colour, jitter, another
-// sample offset) is refused, kInvalidArgument naming the setting, rather than
-// silently ignored.
-Status check_brick_settings(const RenderSettings& s);
+// core (raycast_core.glsl): every optical model (ea, emission, mip, minip,
+// average, iso), 1-4 channels (additive or composite), any transfer function,
+// gradient opacity, depth colour, samples at segment midpoints. What it cannot
+// do (jitter, another sample offset: the brick grid is anchored at segment
+// midpoints so bricks continue each other) is refused, kInvalidArgument naming
+// the setting. `channels`: how many channels the renderer draws.
+Status check_brick_settings(const RenderSettings& s, uint32_t channels = 1);
 
 // Empty-space test for a brick whose payload values (data units, apron
-// included) lie in [lo, hi], given the settings and their transfer table:
-// false only when skipping the brick cannot change any pixel. EA and
-// emission: every table entry the interpolation can reach over the windowed
-// range has zero opacity (gradient opacity would only scale it down). MIP:
-// the whole range is at or below the window's low end (windowed value 0 never
-// raises the running maximum) and the table's entry 0 has zero opacity (else
-// a ray whose every brick was skipped would lose the colour of value 0).
+// included) lie in ranges[c] for drawn channel c, given the settings and their
+// transfer table: false only when skipping the brick cannot change any pixel.
+// Per model:
+//  - ea, emission: every enabled channel's table entries the interpolation can
+//    reach over its windowed range have zero opacity (gradient opacity only
+//    scales opacity down; depth colour changes colour, not opacity).
+//  - mip: every enabled channel's range is at or below its window's low end
+//    (windowed 0 never raises the running maximum) and every enabled channel's
+//    entry 0 is transparent (a ray whose every brick was skipped shows nothing,
+//    one that took samples shows the table at its maximum).
+//  - minip: the mirror image: every range at or above the window's high end
+//    (windowed 1 never lowers the running minimum) and entry 255 transparent.
+//  - average: never (a skipped brick would shorten the length averaged over).
+//  - iso: never (a crossing just past a skipped brick is refined against the
+//    sample before it, which lies in that brick).
+bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, std::span<const ChunkStats> ranges);
+// One channel: ranges = {[lo, hi]}.
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, double lo, double hi);
+
+// Whether a ray's state fits the one RGBA32F texel the multipass waves carry
+// between dispatches (brick_raycast.comp pack_ray): ea with one channel or
+// composite, emission, mip/minip with one channel, average with up to 3, iso.
+// The others march tiled (one dispatch, no state between passes).
+bool brick_state_fits_texel(const RenderSettings& s, uint32_t channels);
 
 // "visited 123 drawn 45 (fallback 2) empty 30 culled 12 missing 3 samples 1.2M uploaded 0.4 MiB hit 97%"
 std::string format_stats(const BrickFrameStats& s);
@@ -110,15 +130,25 @@ class BrickRenderer final : public VolumeRenderer {
   Result<ImageRgba8> render(const Camera& camera, const RenderSettings& settings, const BrickFrameSettings& frame,
                             uint32_t width, uint32_t height, BrickFrameStats* stats = nullptr);
 
-  // Loads `level` of the source into one 3D texture (refused past the
-  // device's 3D image limit) for render_monolithic().
-  Status set_monolithic(uint32_t level);
+  // Loads `level` of the source at `timepoint` into one 3D texture per drawn
+  // channel (refused past the device's 3D image limit) for render_monolithic().
+  Status set_monolithic(uint32_t level, uint32_t timepoint = 0);
   Result<ImageRgba8> render_monolithic(const Camera& camera, const RenderSettings& settings, const LodSettings& clip,
                                        uint32_t width, uint32_t height, BrickFrameStats* stats = nullptr);
 
   BrickPool& pool() { return *pool_; }
+  uint32_t channels() const { return pool_->channels(); }
   // Bricks requested from the stream cache and not yet copied in.
   size_t pending_bricks() const { return pending_.size(); }
+
+  // Makes the pool fit `settings` before frames draw with them: gradients
+  // (gradient opacity, iso normals) need an apron of 2 in the atlas, so the
+  // first settings that need it rebuild the pool with one (vkDeviceWaitIdle,
+  // bricks loaded again). Call it outside any command buffer's recording of
+  // this renderer's work: before begin_frame, or never (record_view then asks
+  // for the rebuild and the next begin_frame does it; until then gradients
+  // read the narrower apron). render() calls it.
+  Status prepare(const RenderSettings& settings);
 
  private:
   BrickRenderer(gpu::Context& ctx, const ChunkSource& src) : ctx_(ctx), src_(src) {}
@@ -128,13 +158,22 @@ class BrickRenderer final : public VolumeRenderer {
   Status ensure_accum(uint32_t width, uint32_t height);
   // Records the transfer table's upload when it changed (once per frame at most).
   Status record_transfer(VkCommandBuffer cmd, const TransferTable& table);
-  // The pipeline specialised for the settings' optical model.
-  Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s);
+  // Rebuilds the pool with `apron` (waits for the device; rebinds every set).
+  Status rebuild_pool(uint32_t apron);
+  // The frame's timepoint: its top level pinned (begin_frame, before any copy is recorded).
+  Status ensure_timepoint(uint32_t timepoint);
+  // Pins the top level of `timepoint` and, with preload_if_fits, every chunk.
+  Status pin_resident(uint32_t timepoint);
+  void bind_atlases(VkDescriptorSet set, const std::vector<const gpu::Image*>& atlases);
+  std::vector<const gpu::Image*> pool_atlases() const;
+  // The pipeline specialised for the settings (model: VXR_MODEL_*, channels, features).
+  Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in texels).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
                    const LodSettings& clip) const;
   // Records one view's dispatches with `set` and writes the result into `target`.
-  Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t width,
+  // `model`: the packed parameters' VXR_MODEL_* (control.x).
+  Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
                      const std::vector<glm::uvec2>& waves, const RenderTarget& target, uint32_t* dispatches);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
@@ -150,13 +189,14 @@ class BrickRenderer final : public VolumeRenderer {
   const ChunkSource& src_;
   BrickRendererOptions opt_;
   std::unique_ptr<BrickPool> pool_;
-  gpu::ComputePipeline pipeline_;  // emission-absorption; its set layout is the sets'
-  std::map<uint32_t, gpu::ComputePipeline> pipelines_;  // other variants: model | gamma << 4 | naive << 5
+  gpu::ComputePipeline pipeline_;  // emission-absorption, one channel; its set layout is the sets'
+  std::map<uint32_t, gpu::ComputePipeline> pipelines_;  // other variants, keyed as in pipeline_for
   gpu::Handle<VkDescriptorPool> desc_pool_;
   VkDescriptorSet mono_set_ = VK_NULL_HANDLE;
   std::vector<VkDescriptorSet> view_sets_;  // one per view of a frame
   gpu::Handle<VkSampler> linear_;
-  gpu::Image transfer_tex_, target_, accum_, mono_tex_;
+  gpu::Image transfer_tex_, target_, accum_;
+  std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, tf_staging_;
   VkDeviceSize params_stride_ = 0;
@@ -169,11 +209,13 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<ChunkKey> requests_;   // render(): the frame's requests, read after it
   uint64_t frame_number_ = 0;
   UploadStats last_upload_;          // streaming: what this frame's begin_frame copied in
-  uint32_t mono_level_ = UINT32_MAX;
+  uint32_t mono_level_ = UINT32_MAX, mono_timepoint_ = 0;
+  uint32_t pinned_timepoint_ = 0;
+  uint32_t apron_wanted_ = 0;        // a view needed a wider apron: the next begin_frame rebuilds the pool
   std::vector<glm::dvec3> ray_dirs_;  // per pixel 1/direction, for build_waves
   std::tuple<glm::dvec3, glm::dvec3, glm::dvec3> rays_for_;
   std::vector<uint32_t> pixel_wave_;
-  double value_scale_ = 255.0;
+  std::vector<double> value_scales_;  // per drawn channel: data units per texel unit
 };
 
 }  // namespace vxr

@@ -55,7 +55,7 @@ class Traversal {
 
  private:
   bool real(const Node& n) const { return n.level <= top_; }
-  ChunkKey key(const Node& n) const { return {n.level, n.c[0], n.c[1], n.c[2], 0, 0}; }
+  ChunkKey key(const Node& n) const { return {n.level, n.c[0], n.c[1], n.c[2], 0, s_.timepoint}; }
 
   BrickBox box(const Node& n) const {
     BrickBox b;
@@ -109,9 +109,7 @@ class Traversal {
 
   bool empty(const Node& n) {
     if (!s_.skip_empty || !real(n)) return false;
-    auto st = src_.stats(key(n));
-    if (!st) return false;  // unknown: draw it
-    return !q_.visible(st->min, st->max);
+    return !q_.visible(key(n));
   }
 
   std::vector<Node> children(const Node& n) const {

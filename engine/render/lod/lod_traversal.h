@@ -9,7 +9,7 @@
 // cut plane and the ROI; decide whether its level suffices by comparing the
 // angle one of its voxels spans at the nearest point of its box with the angle
 // of one pixel (times 2^bias); if it suffices, draw it unless its min/max maps
-// to zero opacity under the transfer function; if not, and every child that
+// to zero opacity under the transfer function (the caller's rule per model); if not, and every child that
 // would be needed is resident, recurse into the children in front-to-back
 // (octant) order, else request the missing children and draw this node
 // meanwhile (never a hole). The list comes out sorted front to back.
@@ -55,6 +55,7 @@ struct LodSettings {
   int force_level = -1;    // >= 0: draw exactly this level (clamped to the pyramid)
   CutPlane cut;
   RoiBox roi;
+  uint32_t timepoint = 0;  // the keys' timepoint (their channel is 0: a brick names every channel)
 };
 
 struct LodStats {
@@ -73,8 +74,9 @@ struct LodResult {
 };
 
 struct LodQueries {
-  // True when some value in [lo, hi] has non-zero opacity.
-  std::function<bool(double lo, double hi)> visible;
+  // False when skipping the brick cannot change any pixel (it is then neither
+  // drawn nor requested). The caller reads the stats of each channel it draws.
+  std::function<bool(const ChunkKey&)> visible;
   // True when the brick is on the GPU and may be drawn this frame.
   std::function<bool(const ChunkKey&)> resident;
 };

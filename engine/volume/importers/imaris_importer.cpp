@@ -1,5 +1,7 @@
 #include "volume/importers/imaris_importer.h"
 
+#include "core/checked_math.h"
+
 #include <hdf5.h>
 
 #include <cmath>
@@ -69,8 +71,11 @@ std::optional<std::string> attr_string(hid_t file, const std::string& obj, const
     H5Dvlen_reclaim(mem.get(), space.get(), H5P_DEFAULT, ptrs.data());
     return s;
   }
+  // Sizes from the file: refuse a text attribute over 1 MiB before allocating it.
+  const auto bytes = checked_product({uint64_t(n), uint64_t(H5Tget_size(type.get()))});
+  if (!bytes || *bytes == 0 || *bytes > (uint64_t(1) << 20)) return std::nullopt;
   const size_t size = H5Tget_size(type.get());
-  std::vector<char> buf(size_t(n) * size + 1, 0);
+  std::vector<char> buf(*bytes + 1, 0);
   if (H5Aread(attr.get(), type.get(), buf.data()) < 0) return std::nullopt;
   std::string s;
   for (size_t i = 0; i < size_t(n) * size; ++i)
@@ -242,7 +247,7 @@ Result<std::unique_ptr<SlabSource>> open_imaris_import(const std::string& path) 
       warnings.push_back(path + ": no " + keys[a] + " attribute; used the stored size " + std::to_string(stored));
     }
     if (!(*v >= 1) || *v > double(stored))
-      return corrupt(path + ": " + keys[a] + " = " + std::to_string(uint64_t(*v)) + " does not fit the stored data (" +
+      return corrupt(path + ": " + keys[a] + " = " + std::to_string(*v) + " does not fit the stored data (" +
                      std::to_string(stored) + ")");
     info.dims[a] = uint64_t(*v);
   }
@@ -255,7 +260,7 @@ Result<std::unique_ptr<SlabSource>> open_imaris_import(const std::string& path) 
     const std::string n = std::to_string(a);
     const auto lo = attr_number(fid, "DataSetInfo/Image", ("ExtMin" + n).c_str());
     const auto hi = attr_number(fid, "DataSetInfo/Image", ("ExtMax" + n).c_str());
-    if (lo && hi && *hi > *lo) {
+    if (lo && hi && *hi > *lo && std::isfinite(*hi - *lo)) {
       info.voxel_size[a] = (*hi - *lo) / double(info.dims[a]);
     } else {
       info.voxel_size[a] = 1.0;

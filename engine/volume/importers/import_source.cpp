@@ -6,6 +6,7 @@
 #include "core/output_file.h"
 
 #include "volume/importers/imaris_importer.h"
+#include "volume/importers/import_limits.h"
 #include "volume/importers/ome_tiff_importer.h"
 #include "volume/importers/ome_zarr_importer.h"
 #include "volume/importers/picture_decoder.h"
@@ -92,6 +93,7 @@ bool voxel_size_usable(const std::array<double, 3>& v) {
 Result<std::unique_ptr<SlabSource>> open_import_source(const std::vector<std::string>& inputs,
                                                        const ImportHints& hints) {
   if (inputs.empty()) return invalid_argument("no input files given");
+  if (hints.memory_bytes) set_import_memory_budget(*hints.memory_bytes);
   const std::string& first = inputs.front();
   Result<std::unique_ptr<SlabSource>> source = unsupported(first + ": unrecognised input format");
   std::error_code ec;

@@ -17,6 +17,9 @@ namespace vxr {
 struct ImportHints {
   std::optional<std::array<double, 3>> voxel_size;
   std::optional<std::string> unit;
+  // The import's memory budget (--memory); readers refuse buffers a header
+  // sizes past it. Unset: the current budget (import_limits.h) stays.
+  std::optional<uint64_t> memory_bytes;
 };
 
 // Finite, positive and at most 1e6 between the largest and smallest axis.

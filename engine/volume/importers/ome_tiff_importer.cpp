@@ -10,6 +10,8 @@
 #include <sstream>
 
 #include "volume/importers/tiff_planes.h"
+#include "core/checked_math.h"
+#include "volume/importers/import_limits.h"
 #include "volume/importers/tiff_reader.h"
 #include "volume/importers/units.h"
 
@@ -126,8 +128,16 @@ Result<std::unique_ptr<SlabSource>> open_ome_tiff_import(const std::string& path
   if (pugi::xml_node ch = child(pixels, "Channel")) spp = std::max(1u, ch.attribute("SamplesPerPixel").as_uint(1));
   if (sc % spp) spp = 1;
   const uint32_t plane_channels = sc / spp;
-  const uint64_t nplanes = uint64_t(sz) * plane_channels * st;
-  if (nplanes > (1u << 26)) return corrupt(xml_path + ": OME-XML describes an absurd number of planes");
+  // SizeZ x SizeC x SizeT can wrap 64 bits; and every plane costs a mapping
+  // entry (~64 bytes) before any pixel is read, so the count must fit the budget.
+  const auto counted = checked_product({sz, plane_channels, st});
+  if (!counted || *counted > (1u << 26))
+    return corrupt(xml_path + ": OME-XML describes an absurd number of planes (SizeZ " + std::to_string(sz) +
+                   " x SizeC " + std::to_string(sc) + " x SizeT " + std::to_string(st) + ")");
+  const uint64_t nplanes = *counted;
+  if (nplanes * 64 > import_memory_budget() / 4)
+    return out_of_range(xml_path + ": OME-XML describes " + std::to_string(nplanes) +
+                        " planes, too many to map within the import memory budget; raise --memory");
   // Plane index <-> (z, c, t) following DimensionOrder (its 3rd letter varies fastest).
   auto size_of = [&](char d) -> uint64_t { return d == 'Z' ? sz : d == 'C' ? plane_channels : st; };
   auto plane_index = [&](uint64_t z, uint64_t c, uint64_t t) {

@@ -18,6 +18,7 @@ class OmeZarrSlabSource final : public SlabSource {
     return image_->read_region(0, channel, timepoint, box, dst);
   }
   std::vector<std::string> warnings() const override { return image_->warnings(); }
+  std::vector<std::string> files() const override { return image_->metadata_files(); }
   std::string format_name() const override {
     const std::string v = image_->version().empty() ? "" : " " + image_->version();
     return image_->version().empty() ? "Zarr v" + std::to_string(image_->zarr_format()) + " array"

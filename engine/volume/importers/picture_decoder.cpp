@@ -6,8 +6,12 @@
 #include <cstdio>
 #include <memory>
 #include <cstring>
+#include <filesystem>
 // jpeglib.h needs size_t and FILE first.
 #include <jpeglib.h>
+
+#include "core/checked_math.h"
+#include "volume/importers/import_limits.h"
 
 namespace vxr {
 namespace {
@@ -42,6 +46,24 @@ void png_error_fn(png_structp png, png_const_charp msg) {
 }
 void png_warning_fn(png_structp, png_const_charp) {}
 
+// A picture's decoded size comes from its header: believe it only as far as
+// the file's bytes can expand (deflate ~1032x; JPEG generously 2^16x) and as
+// far as the import budget goes (the slice cache holds a few pictures), so a
+// 100-byte PNG claiming 10^9 x 10^9 pixels is an error, not a bad_alloc.
+Status check_picture_size(const std::string& path, const PictureHeader& h, uint64_t max_expansion) {
+  std::error_code ec;
+  const uint64_t file_bytes = std::filesystem::file_size(path, ec);
+  const auto bytes = checked_product({h.width, h.height, h.channels, dtype_bytes(h.dtype)});
+  const auto affordable = checked_product({ec ? 0 : file_bytes, max_expansion});
+  const std::string what = path + ": " + std::to_string(h.width) + " x " + std::to_string(h.height) + " pixels";
+  if (!bytes || (affordable && *bytes > *affordable))
+    return corrupt(what + " cannot come from a " + std::to_string(file_bytes) + "-byte file; the file is damaged");
+  if (*bytes > import_memory_budget() / 2)
+    return out_of_range(what + " need " + std::to_string(*bytes >> 20) + " MiB decoded, more than half the import "
+                        "memory budget (" + std::to_string(import_memory_budget() >> 20) + " MiB); raise --memory");
+  return Status::ok();
+}
+
 // One decoding pass for PNG; header_only stops after png_read_update_info.
 Status run_png(const std::string& path, PictureHeader* header, std::vector<uint8_t>* out) {
   FilePtr f(std::fopen(path.c_str(), "rb"));
@@ -75,6 +97,10 @@ Status run_png(const std::string& path, PictureHeader* header, std::vector<uint8
   h.height = png_get_image_height(png, info);
   h.channels = png_get_channels(png, info);
   h.dtype = png_get_bit_depth(png, info) == 16 ? DType::kU16 : DType::kU8;
+  if (Status s = check_picture_size(path, h, 1100); !s) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    return s;
+  }
   if (header) *header = h;
   if (out) {
     const size_t row_bytes = png_get_rowbytes(png, info);
@@ -118,6 +144,10 @@ Status run_jpeg(const std::string& path, PictureHeader* header, std::vector<uint
   h.height = cinfo.image_height;
   h.channels = cinfo.num_components == 1 ? 1 : 3;
   h.dtype = DType::kU8;
+  if (Status s = check_picture_size(path, h, uint64_t(1) << 16); !s) {
+    jpeg_destroy_decompress(&cinfo);
+    return s;
+  }
   if (header) *header = h;
   if (out) {
     jpeg_start_decompress(&cinfo);

@@ -1,10 +1,14 @@
 #include "volume/importers/raw_importer.h"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
+
+#include "core/checked_math.h"
+#include "core/json_number.h"
 
 namespace vxr {
 namespace {
@@ -68,19 +72,26 @@ Result<std::unique_ptr<SlabSource>> open_raw_import(const std::string& json_path
   std::string raw;
   bool swap = false;
   try {
-    const auto dims = j.at("dims").get<std::vector<uint64_t>>();
-    if (dims.size() != 3 || !dims[0] || !dims[1] || !dims[2])
+    const nlohmann::json& jd = j.at("dims");
+    std::optional<uint64_t> dims[3];
+    if (jd.is_array() && jd.size() == 3)
+      for (int a = 0; a < 3; ++a) dims[a] = json_number<uint64_t>(jd[a]);
+    if (!dims[0] || !dims[1] || !dims[2] || !*dims[0] || !*dims[1] || !*dims[2])
       return invalid_argument(json_path + ": \"dims\" must be three positive integers");
-    info.dims = {dims[0], dims[1], dims[2]};
+    info.dims = {*dims[0], *dims[1], *dims[2]};
     auto dt = dtype_from_name(j.at("dtype").get<std::string>());
     if (!dt) return invalid_argument(json_path + ": unknown \"dtype\" (use u8, i8, u16, i16, u32, i32, f32)");
     info.dtype = *dt;
-    info.channels = j.value("channels", 1u);
-    info.timepoints = j.value("timepoints", 1u);
-    if (!info.channels || !info.timepoints) return invalid_argument(json_path + ": channels and timepoints must be >= 1");
+    const auto channels = j.contains("channels") ? json_number<uint32_t>(j["channels"]) : std::optional<uint32_t>(1);
+    const auto timepoints = j.contains("timepoints") ? json_number<uint32_t>(j["timepoints"]) : std::optional<uint32_t>(1);
+    if (!channels || !timepoints || !*channels || !*timepoints)
+      return invalid_argument(json_path + ": \"channels\" and \"timepoints\" must be integers >= 1");
+    info.channels = *channels;
+    info.timepoints = *timepoints;
     if (j.contains("voxel_size")) {
       const auto vs = j["voxel_size"].get<std::vector<double>>();
-      if (vs.size() != 3 || !(vs[0] > 0) || !(vs[1] > 0) || !(vs[2] > 0))
+      if (vs.size() != 3 || !(vs[0] > 0) || !(vs[1] > 0) || !(vs[2] > 0) || !std::isfinite(vs[0]) ||
+          !std::isfinite(vs[1]) || !std::isfinite(vs[2]))
         return invalid_argument(json_path + ": \"voxel_size\" must be three positive numbers");
       info.voxel_size = {vs[0], vs[1], vs[2]};
     }
@@ -93,12 +104,19 @@ Result<std::unique_ptr<SlabSource>> open_raw_import(const std::string& json_path
     return invalid_argument(json_path + ": " + e.what());
   }
   std::error_code ec;
-  const uint64_t need = info.voxels_per_volume() * dtype_bytes(info.dtype) * info.channels * info.timepoints;
+  // The dims must describe the raw file's size exactly; checked so that huge
+  // dims cannot wrap around to match it.
+  const auto need = checked_product({info.dims[0], info.dims[1], info.dims[2], dtype_bytes(info.dtype), info.channels,
+                                     info.timepoints});
+  if (!need || *need > (uint64_t(1) << 56))
+    return out_of_range(json_path + ": \"dims\" " + std::to_string(info.dims[0]) + " x " + std::to_string(info.dims[1]) +
+                        " x " + std::to_string(info.dims[2]) + " (with channels and timepoints) describe more bytes than "
+                        "any file holds; fix the sidecar");
   const uint64_t have = std::filesystem::file_size(raw, ec);
   if (ec) return not_found(raw + ": cannot open (named by " + json_path + ")");
-  if (have != need)
+  if (have != *need)
     return corrupt(raw + ": has " + std::to_string(have) + " bytes, but " + json_path + " describes " +
-                   std::to_string(need));
+                   std::to_string(*need));
   return std::unique_ptr<SlabSource>(new RawSource(std::move(info), raw, swap));
 }
 

@@ -11,6 +11,9 @@
 #include <fstream>
 #include <optional>
 
+#include "core/checked_math.h"
+#include "volume/importers/import_limits.h"
+
 namespace vxr::tiff {
 
 struct TiffFile::Sink {
@@ -58,6 +61,23 @@ float half_to_float(uint16_t h) {
   float f;
   std::memcpy(&f, &bits, 4);
   return f;
+}
+
+// The most a block of one stored byte can decode to with compression `c`: a
+// header's strip size is believed only as far as its stored bytes can pay
+// for it (a 158-byte file claiming 2 GB strips grew to 24 GB).
+// Most bytes of uncompressed rows read_region holds at once.
+constexpr uint64_t kRawScratchBytes = uint64_t(16) << 20;
+
+uint64_t max_expansion(uint16_t c) {
+  switch (c) {
+    case COMPRESSION_NONE: return 1;
+    case COMPRESSION_PACKBITS: return 64;         // 2 bytes -> 128 repeats
+    case COMPRESSION_DEFLATE:
+    case COMPRESSION_ADOBE_DEFLATE: return 1100;  // deflate's limit is 1032:1
+    case COMPRESSION_LZW: return 4096;            // one 9..12-bit code -> at most 4094 bytes
+    default: return uint64_t(1) << 16;           // JPEG, ZSTD, LZMA, fax...: generous
+  }
 }
 
 const char* compression_name(uint16_t c) {
@@ -114,7 +134,7 @@ std::optional<std::pair<uint64_t, uint64_t>> raw_first_page_size(const std::stri
   if (b.size() < 16) return std::nullopt;
   const bool be = b[0] == 'M', big = (be ? b[3] : b[2]) == 43;
   auto rd = [&](uint64_t o, int n) -> std::optional<uint64_t> {
-    if (o + n > b.size()) return std::nullopt;
+    if (!range_inside(o, uint64_t(n), b.size())) return std::nullopt;  // o comes from the file: no o + n overflow
     uint64_t v = 0;
     for (int i = 0; i < n; ++i) v |= uint64_t(b[o + i]) << (8 * (be ? n - 1 - i : i));
     return v;
@@ -124,7 +144,9 @@ std::optional<std::pair<uint64_t, uint64_t>> raw_first_page_size(const std::stri
   const auto count = big ? rd(*ifd, 8) : rd(*ifd, 2);
   if (!count) return std::nullopt;
   uint64_t w = 0, h = 0;
-  const uint64_t entry = big ? 20 : 12, first = *ifd + (big ? 8 : 2);
+  const uint64_t entry = big ? 20 : 12;
+  if (*ifd > b.size()) return std::nullopt;
+  const uint64_t first = *ifd + (big ? 8 : 2);
   for (uint64_t i = 0; i < *count && i < 4096; ++i) {
     const auto tag = rd(first + i * entry, 2), type = rd(first + i * entry + 2, 2);
     if (!tag || !type) break;
@@ -172,7 +194,8 @@ Result<std::unique_ptr<TiffFile>> TiffFile::open(const std::string& path) {
   TIFFOpenOptions* opts = TIFFOpenOptionsAlloc();
   TIFFOpenOptionsSetErrorHandlerExtR(opts, on_error, f->sink_.get());
   TIFFOpenOptionsSetWarningHandlerExtR(opts, on_warning, f->sink_.get());
-  TIFFOpenOptionsSetMaxSingleMemAlloc(opts, tmsize_t(1) << 31);
+  // libtiff sizes some buffers from the header; keep each within the import budget.
+  TIFFOpenOptionsSetMaxSingleMemAlloc(opts, tmsize_t(std::min<uint64_t>(uint64_t(1) << 31, import_memory_budget())));
   // "m": no memory mapping. libtiff maps read-only files by default, and every
   // compressed strip it decodes from the map stays resident (file-backed RSS):
   // a 1.4 GB LZW stack imported with --memory 256M peaked at 1.7 GB RSS,
@@ -324,15 +347,45 @@ Result<PageInfo> TiffFile::describe_current(uint32_t index) {
   if (expected_blocks < need)
     return corrupt(where + ": has " + std::to_string(expected_blocks) + " strips/tiles but needs " +
                    std::to_string(need) + "; the file is damaged");
+  // Blocks that are decoded whole (compressed, or bit-reversed) get a buffer
+  // of block_bytes: it must fit the import budget before anything is read.
+  const bool decoded = p.compression != COMPRESSION_NONE || p.fill_order != FILLORDER_MSB2LSB;
+  if (decoded && block_bytes > max_decoded_block_bytes())
+    return out_of_range(where + ": " + (p.tiled ? "tiles" : "strips") + " of " + std::to_string(block_bytes) +
+                        " bytes each exceed the " + std::to_string(max_decoded_block_bytes() >> 10) +
+                        " KiB one decoded block may take (1/8 of the import memory budget, " +
+                        std::to_string(import_memory_budget() >> 20) +
+                        " MiB); re-save with smaller strips or tiles, or raise --memory");
+  // Uncompressed rows are read whole (read_region): one must fit the per-block share of the budget.
+  const uint64_t row_bytes = p.tiled ? TIFFTileRowSize64(tif_) : TIFFScanlineSize64(tif_);
+  if (!decoded && row_bytes > max_decoded_block_bytes())
+    return out_of_range(where + ": rows of " + std::to_string(row_bytes) + " bytes exceed the " +
+                        std::to_string(max_decoded_block_bytes() >> 10) +
+                        " KiB one read may take (1/8 of the import memory budget); the file is damaged or too wide");
+  const uint32_t rows_per_block = p.block_h;
   for (uint32_t i = 0; i < need; ++i) {
     int err = 0;
     const uint64_t off = TIFFGetStrileOffsetWithErr(tif_, i, &err);
     const uint64_t len = err ? 0 : TIFFGetStrileByteCountWithErr(tif_, i, &err);
     if (err) return corrupt(where + ": cannot read strip/tile offsets; the file is damaged");
-    if (off > file_size_ || len > file_size_ - off)
+    if (!range_inside(off, len, file_size_))
       return corrupt(where + ": image data runs past the end of the file (" + (p.tiled ? "tile " : "strip ") +
                      std::to_string(i) + " ends at byte " + std::to_string(off + len) + ", the file has " +
                      std::to_string(file_size_) + " bytes); the file is truncated");
+    if (decoded) {
+      // A strip's rows: the last strip of a plane may be shorter than the rest.
+      uint64_t bytes = block_bytes;
+      if (!p.tiled) {
+        const uint32_t row0 = (i % uint32_t(per_plane)) * rows_per_block;
+        const uint32_t rows = std::min<uint32_t>(rows_per_block, h - std::min(h, row0));
+        bytes = TIFFVStripSize64(tif_, rows);
+      }
+      const auto affordable = checked_product({len, max_expansion(p.compression)});
+      if (affordable && bytes > *affordable)
+        return corrupt(where + ": " + (p.tiled ? "tile " : "strip ") + std::to_string(i) + " stores " +
+                       std::to_string(len) + " bytes but claims " + std::to_string(bytes) +
+                       " decoded, more than " + compression_name(p.compression) + " can expand to; the file is damaged");
+    }
   }
   take_error();
   return p;
@@ -464,43 +517,51 @@ Status TiffFile::read_region(const PageInfo& page, uint32_t channel, uint32_t x0
       const uint32_t bx0 = bx * page.block_w, by0 = by * page.block_h;
       const uint32_t rx0 = std::max(x0, bx0), rx1 = std::min(x0 + w, std::min(bx0 + page.block_w, page.width));
       const uint32_t ry0 = std::max(y0, by0), ry1 = std::min(y0 + h, std::min(by0 + page.block_h, page.height));
-      const uint8_t* base = nullptr;
-      uint32_t first_row = 0;  // block row that `base` starts at
-      if (raw) {
-        uint64_t off = page.raw_offset, len = row_bytes * page.height;
-        if (!virtual_page) {
-          int err = 0;
-          off = TIFFGetStrileOffsetWithErr(tif_, block, &err);
-          len = err ? 0 : TIFFGetStrileByteCountWithErr(tif_, block, &err);
-          if (err) return corrupt(path_ + ": cannot read strip/tile offsets");
-        }
-        VXR_RETURN_IF_ERROR(read_rows_raw(page, off, len, ry0 - by0, ry1 - ry0, row_bytes, scratch_));
-        base = scratch_.data();
-        first_row = ry0 - by0;
-      } else {
-        if (cached_block_ != block || cached_ifd_ != page.ifd_offset) {
-          cached_block_ = ~0u;
-          VXR_RETURN_IF_ERROR(decode_block(page, block, scratch2_));
-          cached_block_ = block;
-          cached_ifd_ = page.ifd_offset;
-        }
-        base = scratch2_.data();
-      }
-      for (uint32_t y = ry0; y < ry1; ++y) {
-        const uint8_t* row = base + uint64_t(y - by0 - first_row) * row_bytes;
-        uint8_t* out = dst + (uint64_t(y - y0) * w + (rx0 - x0)) * ob;
-        const uint64_t first = uint64_t(rx0 - bx0) * spb + soff;
-        if (!palette) {
-          extract_samples(row, first, spb, rx1 - rx0, page, out);
+      // Uncompressed rows are read whole (every column), so a page that claims
+      // very wide rows is read a few rows at a time: the scratch buffer stays
+      // near kRawScratchBytes whatever width the header claims.
+      const uint32_t batch =
+          raw ? uint32_t(std::clamp<uint64_t>(kRawScratchBytes / row_bytes, 1, ry1 - ry0)) : ry1 - ry0;
+      for (uint32_t ys = ry0; ys < ry1; ys += batch) {
+        const uint32_t ye = std::min(ry1, ys + batch);
+        const uint8_t* base = nullptr;
+        uint32_t first_row = 0;  // block row that `base` starts at
+        if (raw) {
+          uint64_t off = page.raw_offset, len = row_bytes * page.height;
+          if (!virtual_page) {
+            int err = 0;
+            off = TIFFGetStrileOffsetWithErr(tif_, block, &err);
+            len = err ? 0 : TIFFGetStrileByteCountWithErr(tif_, block, &err);
+            if (err) return corrupt(path_ + ": cannot read strip/tile offsets");
+          }
+          VXR_RETURN_IF_ERROR(read_rows_raw(page, off, len, ys - by0, ye - ys, row_bytes, scratch_));
+          base = scratch_.data();
+          first_row = ys - by0;
         } else {
-          extract_samples(row, first, spb, rx1 - rx0, index_page, idx.data());
-          const std::vector<uint16_t>& map = (*page.colormap)[channel];
-          for (uint32_t i = 0; i < rx1 - rx0; ++i) {
-            uint16_t k = idx[i];
-            if (index_page.dtype == DType::kU16) std::memcpy(&k, idx.data() + 2 * i, 2);
-            const uint16_t v = map[std::min<size_t>(k, map.size() - 1)];
-            if (ob == 1) out[i] = uint8_t(v);
-            else std::memcpy(out + 2 * i, &v, 2);
+          if (cached_block_ != block || cached_ifd_ != page.ifd_offset) {
+            cached_block_ = ~0u;
+            VXR_RETURN_IF_ERROR(decode_block(page, block, scratch2_));
+            cached_block_ = block;
+            cached_ifd_ = page.ifd_offset;
+          }
+          base = scratch2_.data();
+        }
+        for (uint32_t y = ys; y < ye; ++y) {
+          const uint8_t* row = base + uint64_t(y - by0 - first_row) * row_bytes;
+          uint8_t* out = dst + (uint64_t(y - y0) * w + (rx0 - x0)) * ob;
+          const uint64_t first = uint64_t(rx0 - bx0) * spb + soff;
+          if (!palette) {
+            extract_samples(row, first, spb, rx1 - rx0, page, out);
+          } else {
+            extract_samples(row, first, spb, rx1 - rx0, index_page, idx.data());
+            const std::vector<uint16_t>& map = (*page.colormap)[channel];
+            for (uint32_t i = 0; i < rx1 - rx0; ++i) {
+              uint16_t k = idx[i];
+              if (index_page.dtype == DType::kU16) std::memcpy(&k, idx.data() + 2 * i, 2);
+              const uint16_t v = map[std::min<size_t>(k, map.size() - 1)];
+              if (ob == 1) out[i] = uint8_t(v);
+              else std::memcpy(out + 2 * i, &v, 2);
+            }
           }
         }
       }

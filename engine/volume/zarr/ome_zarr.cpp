@@ -13,7 +13,9 @@ namespace {
 using json = nlohmann::json;
 namespace fs = std::filesystem;
 
-Status bad(const std::string& what, const std::string& why) { return invalid_argument(what + ": " + why); }
+Status bad(const std::string& what, const std::string& why) {
+  return invalid_argument(what + ": " + why);
+}
 
 std::string join_key(const std::string& prefix, const std::string& key) {
   return prefix.empty() ? key : prefix + "/" + key;
@@ -107,7 +109,11 @@ Result<std::vector<Axis>> parse_axes(const json& ms, size_t ndim, const std::str
     } else {
       return bad(what, where + "[" + std::to_string(i) + "] must be an object with a string 'name'");
     }
-    if (type.empty()) type = ax.name == "t" ? "time" : ax.name == "c" ? "channel" : ax.name == "x" || ax.name == "y" || ax.name == "z" ? "space" : "";
+    if (type.empty())
+      type = ax.name == "t"                                       ? "time"
+             : ax.name == "c"                                     ? "channel"
+             : ax.name == "x" || ax.name == "y" || ax.name == "z" ? "space"
+                                                                  : "";
     ax.role = type == "space" ? Role::kSpace : type == "time" ? Role::kTime : Role::kChannel;
     out.push_back(ax);
   }
@@ -133,7 +139,8 @@ Status parse_transforms(const json& list, size_t ndim, const std::string& what, 
     if (!v.is_array() || v.size() != ndim)
       return bad(what, at + ": '" + type + "' must be a list of " + std::to_string(ndim) + " numbers");
     for (size_t k = 0; k < ndim; ++k) {
-      if (!v[k].is_number()) return bad(what, at + ": '" + type + "' must be a list of " + std::to_string(ndim) + " numbers");
+      if (!v[k].is_number())
+        return bad(what, at + ": '" + type + "' must be a list of " + std::to_string(ndim) + " numbers");
       const double x = v[k].get<double>();
       if (type == "scale") {
         if (!(x > 0) || !std::isfinite(x)) return bad(what, at + ": 'scale' values must be positive");
@@ -204,8 +211,7 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
     const json& list = g.attrs.at("multiscales");
     if (!list.is_array() || list.empty() || !list[0].is_object())
       return bad(g.what, "'multiscales' must be a non-empty list of objects");
-    if (list.size() > 1)
-      img->warnings_.push_back("using the first of " + std::to_string(list.size()) + " multiscales");
+    if (list.size() > 1) img->warnings_.push_back("using the first of " + std::to_string(list.size()) + " multiscales");
     ms = list[0];
     img->version_ = !g.ome_version.empty() ? g.ome_version : ms.value("version", "");
     if (!ms.contains("datasets") || !ms.at("datasets").is_array() || ms.at("datasets").empty())
@@ -222,7 +228,8 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
     for (size_t i = 0; i < ds.size(); ++i) {
       if (!ds[i].is_object() || !ds[i].contains("path") || !ds[i].at("path").is_string() ||
           ds[i].at("path").get<std::string>().empty())
-        return bad(g.what, "'multiscales'[0]: 'datasets'[" + std::to_string(i) + "] must have a non-empty string 'path'");
+        return bad(g.what,
+                   "'multiscales'[0]: 'datasets'[" + std::to_string(i) + "] must have a non-empty string 'path'");
       paths.push_back(join_key(prefix, ds[i].at("path").get<std::string>()));
     }
   }
@@ -287,10 +294,9 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
     std::vector<double> s(ndim, 1.0), t(ndim, 0.0);
     bool has_scale = false;
     if (!g.is_array && ms.at("datasets")[l].contains("coordinateTransformations"))
-      VXR_RETURN_IF_ERROR(parse_transforms(ms.at("datasets")[l].at("coordinateTransformations"), ndim, g.what,
-                                           "'multiscales'[0]: 'datasets'[" + std::to_string(l) +
-                                               "]: 'coordinateTransformations'",
-                                           s, t, has_scale));
+      VXR_RETURN_IF_ERROR(parse_transforms(
+          ms.at("datasets")[l].at("coordinateTransformations"), ndim, g.what,
+          "'multiscales'[0]: 'datasets'[" + std::to_string(l) + "]: 'coordinateTransformations'", s, t, has_scale));
     all_scaled = all_scaled && has_scale;
     OmeLevel& L = img->levels_[l];
     const ArrayMeta& m = L.array->meta();
@@ -308,8 +314,8 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
   for (OmeLevel& L : img->levels_)
     for (int a = 0; a < 3; ++a) {
       // Factors from the scales (what the spec says), else from the shapes.
-      L.factor[a] = all_scaled ? L.scale[a] / L0.scale[a]
-                               : double(L0.dims[a]) / double(std::max<uint64_t>(1, L.dims[a]));
+      L.factor[a] =
+          all_scaled ? L.scale[a] / L0.scale[a] : double(L0.dims[a]) / double(std::max<uint64_t>(1, L.dims[a]));
       if (img->space_axis_[a] < 0) L.factor[a] = 1.0;
     }
 
@@ -323,8 +329,8 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
     if (!axes[ax].unit.empty() && !units.back())
       img->warnings_.push_back("axis '" + axes[ax].name + "' has unit '" + axes[ax].unit +
                                "', not a length; voxel sizes are taken as unitless");
-    if (units.size() > 1 && (!units.back() != !units.front() ||
-                             (units.back() && units.back()->name != units.front()->name)))
+    if (units.size() > 1 &&
+        (!units.back() != !units.front() || (units.back() && units.back()->name != units.front()->name)))
       same = false;
   }
   VolumeInfo& info = img->info_;
@@ -357,6 +363,19 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
   if (info.channels == 0 || info.timepoints == 0 || info.voxels_per_volume() == 0)
     return bad(g.what, "the image is empty (a dimension of level 0 is 0)");
   return img;
+}
+
+std::vector<std::string> OmeZarrImage::metadata_files() const {
+  std::vector<std::string> folders{root_, root_ + "/0"};  // "0": a bioformats2raw image
+  for (const OmeLevel& L : levels_) folders.push_back(L.path.empty() ? root_ : root_ + "/" + L.path);
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const std::string& f : folders)
+    for (const char* name : {"zarr.json", ".zattrs", ".zgroup", ".zarray", ".zmetadata"})
+      if (const std::string p = f + "/" + name;
+          fs::is_regular_file(p, ec) && std::find(out.begin(), out.end(), p) == out.end())
+        out.push_back(p);
+  return out;
 }
 
 Status OmeZarrImage::read_region(uint32_t level, uint32_t channel, uint32_t timepoint, const Box3& box,

@@ -30,7 +30,7 @@
 namespace vxr::zarr {
 
 struct OmeLevel {
-  std::string path;                       // the dataset's path in the store
+  std::string path;  // the dataset's path in the store
   std::unique_ptr<ZarrArray> array;
   std::array<uint64_t, 3> dims{1, 1, 1};  // x, y, z voxels
   std::array<double, 3> scale{1, 1, 1};   // physical size of one voxel, x, y, z (in the image's unit)
@@ -45,8 +45,8 @@ bool looks_like_zarr(const std::string& path);
 class OmeZarrImage {
  public:
   // cache_bytes: decoded-chunk budget shared out between the levels.
-  static Result<std::unique_ptr<OmeZarrImage>> open(const std::string& path,
-                                                    uint64_t cache_bytes = uint64_t(256) << 20);
+  static Result<std::unique_ptr<OmeZarrImage>> open(const std::string& path, uint64_t cache_bytes = uint64_t(256)
+                                                                                                    << 20);
 
   const VolumeInfo& info() const { return info_; }
   const std::vector<OmeLevel>& levels() const { return levels_; }
@@ -54,6 +54,10 @@ class OmeZarrImage {
   const std::string& version() const { return version_; }  // "0.4", "0.5", ... or "" for a bare array
   int zarr_format() const { return levels_.front().array->meta().zarr_format; }
   std::vector<std::string> warnings() const { return warnings_; }
+  // The metadata files the image was opened from (groups' and arrays'), for
+  // "outputs never touch inputs" checks. Chunk files are not listed: a large
+  // image has millions.
+  std::vector<std::string> metadata_files() const;
 
   // Reads `box` (within the level's dims) of one channel and timepoint, x
   // fastest, native byte order. Thread-safe.

@@ -12,7 +12,9 @@ namespace {
 
 using json = nlohmann::json;
 
-Status bad(const std::string& what, const std::string& why) { return invalid_argument(what + ": " + why); }
+Status bad(const std::string& what, const std::string& why) {
+  return invalid_argument(what + ": " + why);
+}
 
 Result<json> parse_json(const std::string& text, const std::string& what) {
   try {
@@ -53,7 +55,8 @@ Status check_chunk_size(const std::vector<uint64_t>& chunks, DType dtype, const 
 // Sides up to 2^40 voxels keep every offset and chunk count far from overflow.
 Status check_shape(const std::vector<uint64_t>& shape, const std::string& what) {
   for (uint64_t v : shape)
-    if (v > (uint64_t(1) << 40)) return unsupported(what + ": 'shape' has a side over 2^40 voxels; vxr reads smaller arrays");
+    if (v > (uint64_t(1) << 40))
+      return unsupported(what + ": 'shape' has a side over 2^40 voxels; vxr reads smaller arrays");
   return Status();
 }
 
@@ -69,13 +72,20 @@ Result<DtypeSpec> parse_v2_dtype(const json& j, const std::string& what) {
   if (s.size() != 3 || std::string("<>|=").find(s[0]) == std::string::npos) return bad(what, expect);
   const std::string body = s.substr(1);
   DType t;
-  if (body == "u1") t = DType::kU8;
-  else if (body == "i1") t = DType::kI8;
-  else if (body == "u2") t = DType::kU16;
-  else if (body == "i2") t = DType::kI16;
-  else if (body == "u4") t = DType::kU32;
-  else if (body == "i4") t = DType::kI32;
-  else if (body == "f4") t = DType::kF32;
+  if (body == "u1")
+    t = DType::kU8;
+  else if (body == "i1")
+    t = DType::kI8;
+  else if (body == "u2")
+    t = DType::kU16;
+  else if (body == "i2")
+    t = DType::kI16;
+  else if (body == "u4")
+    t = DType::kU32;
+  else if (body == "i4")
+    t = DType::kI32;
+  else if (body == "f4")
+    t = DType::kF32;
   else
     return unsupported(what + ": 'dtype' '" + s + "' is not read (vxr reads u1, i1, u2, i2, u4, i4, f4; convert " +
                        "64-bit data first)");
@@ -132,13 +142,26 @@ Result<std::vector<uint8_t>> parse_fill(const json& j, DType t, const std::strin
   const double v = j.get<double>();
   auto in_range = [&](double lo, double hi) { return v >= lo && v <= hi; };
   switch (t) {
-    case DType::kU8: if (in_range(0, 255)) return element_bytes(static_cast<uint8_t>(v)); break;
-    case DType::kI8: if (in_range(-128, 127)) return element_bytes(static_cast<int8_t>(v)); break;
-    case DType::kU16: if (in_range(0, 65535)) return element_bytes(static_cast<uint16_t>(v)); break;
-    case DType::kI16: if (in_range(-32768, 32767)) return element_bytes(static_cast<int16_t>(v)); break;
-    case DType::kU32: if (in_range(0, 4294967295.0)) return element_bytes(static_cast<uint32_t>(v)); break;
-    case DType::kI32: if (in_range(-2147483648.0, 2147483647.0)) return element_bytes(static_cast<int32_t>(v)); break;
-    default: break;
+    case DType::kU8:
+      if (in_range(0, 255)) return element_bytes(static_cast<uint8_t>(v));
+      break;
+    case DType::kI8:
+      if (in_range(-128, 127)) return element_bytes(static_cast<int8_t>(v));
+      break;
+    case DType::kU16:
+      if (in_range(0, 65535)) return element_bytes(static_cast<uint16_t>(v));
+      break;
+    case DType::kI16:
+      if (in_range(-32768, 32767)) return element_bytes(static_cast<int16_t>(v));
+      break;
+    case DType::kU32:
+      if (in_range(0, 4294967295.0)) return element_bytes(static_cast<uint32_t>(v));
+      break;
+    case DType::kI32:
+      if (in_range(-2147483648.0, 2147483647.0)) return element_bytes(static_cast<int32_t>(v));
+      break;
+    default:
+      break;
   }
   return bad(what, "'fill_value' is outside the range of " + std::string(dtype_name(t)));
 }
@@ -245,8 +268,10 @@ Result<ArrayMeta> parse_v2_array(const std::string& text, const std::string& wha
     VXR_RETURN_IF_ERROR(check_chunk_size(m.chunks, m.dtype, "chunks", what));
     VXR_ASSIGN_OR_RETURN(m.fill, parse_fill(j.contains("fill_value") ? j.at("fill_value") : json(), m.dtype, what));
     const json order = j.contains("order") ? j.at("order") : json("C");
-    if (order == "F") m.transpose = reversed_order(m.shape.size());
-    else if (order != "C") return bad(what, "'order' must be \"C\" or \"F\"");
+    if (order == "F")
+      m.transpose = reversed_order(m.shape.size());
+    else if (order != "C")
+      return bad(what, "'order' must be \"C\" or \"F\"");
     if (j.contains("compressor") && !j.at("compressor").is_null()) {
       auto c = parse_v2_compressor(j.at("compressor"));
       if (!c) return Status(c.status().code(), what + ": " + c.status().message());
@@ -257,8 +282,10 @@ Result<ArrayMeta> parse_v2_array(const std::string& text, const std::string& wha
     m.separator = '.';
     if (j.contains("dimension_separator")) {
       const json& s = j.at("dimension_separator");
-      if (s == "/") m.separator = '/';
-      else if (s != ".") return bad(what, "'dimension_separator' must be \".\" or \"/\"");
+      if (s == "/")
+        m.separator = '/';
+      else if (s != ".")
+        return bad(what, "'dimension_separator' must be \".\" or \"/\"");
     }
     return m;
   } catch (const json::exception& e) {
@@ -280,8 +307,8 @@ Result<ArrayMeta> parse_v3_array(const std::string& text, const std::string& wha
     const size_t n = m.shape.size();
     if (!j.contains("data_type")) return bad(what, "'data_type' is missing");
     VXR_ASSIGN_OR_RETURN(m.dtype, parse_v3_dtype(j.at("data_type"), what));
-    if (!j.contains("chunk_grid") || !j.at("chunk_grid").is_object() || j.at("chunk_grid").value("name", "") != "regular" ||
-        !j.at("chunk_grid").contains("configuration"))
+    if (!j.contains("chunk_grid") || !j.at("chunk_grid").is_object() ||
+        j.at("chunk_grid").value("name", "") != "regular" || !j.at("chunk_grid").contains("configuration"))
       return bad(what, "'chunk_grid' must be {\"name\": \"regular\", \"configuration\": {\"chunk_shape\": [...]}}");
     std::vector<uint64_t> outer;
     {
@@ -307,7 +334,8 @@ Result<ArrayMeta> parse_v3_array(const std::string& text, const std::string& wha
     if (j.contains("storage_transformers") && !j.at("storage_transformers").empty())
       return unsupported(what + ": 'storage_transformers' are not read");
     if (j.contains("dimension_names") && j.at("dimension_names").is_array())
-      for (const json& d : j.at("dimension_names")) m.dimension_names.push_back(d.is_string() ? d.get<std::string>() : "");
+      for (const json& d : j.at("dimension_names"))
+        m.dimension_names.push_back(d.is_string() ? d.get<std::string>() : "");
     if (!j.contains("codecs")) return bad(what, "'codecs' is missing");
     VXR_ASSIGN_OR_RETURN(CodecList cl, parse_v3_codecs(j.at("codecs"), n, what, "'codecs'"));
     if (!cl.sharding) {
@@ -457,9 +485,7 @@ Result<ZarrArray::Bytes> ZarrArray::decode_unit(Bytes stored, const std::string&
   return out;
 }
 
-Result<std::shared_ptr<const std::vector<ZarrArray::ShardEntry>>> ZarrArray::shard_index(
-    const std::vector<uint64_t>& shard, const std::string& key) const {
-  (void)shard;
+Result<std::shared_ptr<const std::vector<ZarrArray::ShardEntry>>> ZarrArray::shard_index(const std::string& key) const {
   {
     std::lock_guard lock(mutex_);
     for (auto it = shard_indexes_.begin(); it != shard_indexes_.end(); ++it)
@@ -497,7 +523,7 @@ Result<std::shared_ptr<const ZarrArray::Bytes>> ZarrArray::load_chunk(const std:
   if (!meta_.sharded) {
     const std::string key = chunk_key(index);
     auto got = store_->get(key);
-    if (!got) return Status(got.status().code(), got.status().message());
+    if (!got) return got.status();
     if (!*got) return std::shared_ptr<const Bytes>();
     VXR_ASSIGN_OR_RETURN(Bytes decoded, decode_unit(std::move(**got), key));
     return std::shared_ptr<const Bytes>(std::make_shared<Bytes>(std::move(decoded)));
@@ -511,17 +537,17 @@ Result<std::shared_ptr<const ZarrArray::Bytes>> ZarrArray::load_chunk(const std:
     linear = linear * per + index[i] % per;
   }
   const std::string key = chunk_key(shard);
-  VXR_ASSIGN_OR_RETURN(auto entries, shard_index(shard, key));
+  VXR_ASSIGN_OR_RETURN(auto entries, shard_index(key));
   if (!entries) return std::shared_ptr<const Bytes>();  // no shard: all fill
   const ShardEntry e = (*entries)[linear];
   if (e.offset == ~uint64_t(0) && e.nbytes == ~uint64_t(0)) return std::shared_ptr<const Bytes>();
   auto got = store_->get(key, ByteRange::range(e.offset, e.nbytes));
-  if (!got) return corrupt(store_->describe(key) + ": inner chunk " + std::to_string(linear) +
-                           " points outside the shard (" + got.status().message() + ")");
+  if (!got)
+    return corrupt(store_->describe(key) + ": inner chunk " + std::to_string(linear) + " points outside the shard (" +
+                   got.status().message() + ")");
   if (!*got) return std::shared_ptr<const Bytes>();
   auto decoded = decode_unit(std::move(**got), key);
-  if (!decoded)
-    return corrupt(decoded.status().message() + " (inner chunk " + std::to_string(linear) + ")");
+  if (!decoded) return corrupt(decoded.status().message() + " (inner chunk " + std::to_string(linear) + ")");
   return std::shared_ptr<const Bytes>(std::make_shared<Bytes>(std::move(decoded).value()));
 }
 

@@ -40,21 +40,21 @@ namespace vxr::zarr {
 
 struct ArrayMeta {
   int zarr_format = 2;
-  std::vector<uint64_t> shape;             // array dims, slowest first (as stored: e.g. t,c,z,y,x)
-  std::vector<uint64_t> chunks;            // shape of one read unit (a v3 shard's inner chunk)
+  std::vector<uint64_t> shape;   // array dims, slowest first (as stored: e.g. t,c,z,y,x)
+  std::vector<uint64_t> chunks;  // shape of one read unit (a v3 shard's inner chunk)
   DType dtype = DType::kU8;
-  bool big_endian = false;                 // as stored; reads return native order
-  std::vector<uint8_t> fill;               // one element, native byte order
-  std::vector<uint32_t> transpose;         // stored = transpose(chunk, order); empty when C order
-  std::vector<BytesCodec> codecs;          // applied in order when writing
-  std::string key_prefix;                  // "c" for v3 default keys, "" otherwise
+  bool big_endian = false;          // as stored; reads return native order
+  std::vector<uint8_t> fill;        // one element, native byte order
+  std::vector<uint32_t> transpose;  // stored = transpose(chunk, order); empty when C order
+  std::vector<BytesCodec> codecs;   // applied in order when writing
+  std::string key_prefix;           // "c" for v3 default keys, "" otherwise
   char separator = '.';
   std::vector<std::string> dimension_names;  // v3 dimension_names (may be empty)
   // v3 sharding_indexed: each stored object is a shard of shard_shape holding
   // inner chunks of `chunks`.
   bool sharded = false;
   std::vector<uint64_t> shard_shape;
-  std::vector<BytesCodec> index_codecs;    // after the little-endian (offset, nbytes) table
+  std::vector<BytesCodec> index_codecs;  // after the little-endian (offset, nbytes) table
   bool index_at_end = true;
 
   uint64_t chunk_elements() const;
@@ -103,12 +103,12 @@ class ZarrArray {
   // it is absent (fill value).
   Result<std::shared_ptr<const Bytes>> chunk(const std::vector<uint64_t>& index) const;
   Result<std::shared_ptr<const Bytes>> load_chunk(const std::vector<uint64_t>& index) const;
-  // Offset and size of an inner chunk inside its shard; nbytes == ~0 when absent.
+  // Offset and size of an inner chunk inside its shard; both ~0 when absent.
   struct ShardEntry {
     uint64_t offset = 0, nbytes = 0;
   };
-  Result<std::shared_ptr<const std::vector<ShardEntry>>> shard_index(const std::vector<uint64_t>& shard,
-                                                                     const std::string& key) const;
+  // The index of the shard stored at `key`; nullptr when the shard is absent.
+  Result<std::shared_ptr<const std::vector<ShardEntry>>> shard_index(const std::string& key) const;
   Result<Bytes> decode_unit(Bytes stored, const std::string& key) const;
 
   std::shared_ptr<const ZarrStore> store_;

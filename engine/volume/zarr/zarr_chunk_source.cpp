@@ -12,13 +12,20 @@ namespace {
 // Range of every value a dtype can hold: what a chunk not read yet may contain.
 ChunkStats dtype_range(DType t) {
   switch (t) {
-    case DType::kU8: return {0, 255};
-    case DType::kI8: return {-128, 127};
-    case DType::kU16: return {0, 65535};
-    case DType::kI16: return {-32768, 32767};
-    case DType::kU32: return {0, 4294967295.0};
-    case DType::kI32: return {-2147483648.0, 2147483647.0};
-    case DType::kF32: return {-double(FLT_MAX), double(FLT_MAX)};
+    case DType::kU8:
+      return {0, 255};
+    case DType::kI8:
+      return {-128, 127};
+    case DType::kU16:
+      return {0, 65535};
+    case DType::kI16:
+      return {-32768, 32767};
+    case DType::kU32:
+      return {0, 4294967295.0};
+    case DType::kI32:
+      return {-2147483648.0, 2147483647.0};
+    case DType::kF32:
+      return {-double(FLT_MAX), double(FLT_MAX)};
   }
   return {0, 0};
 }
@@ -41,18 +48,27 @@ ChunkStats typed_range(const std::vector<uint8_t>& data) {
 
 ChunkStats payload_range(DType t, const std::vector<uint8_t>& data) {
   switch (t) {
-    case DType::kU8: return typed_range<uint8_t>(data);
-    case DType::kI8: return typed_range<int8_t>(data);
-    case DType::kU16: return typed_range<uint16_t>(data);
-    case DType::kI16: return typed_range<int16_t>(data);
-    case DType::kU32: return typed_range<uint32_t>(data);
-    case DType::kI32: return typed_range<int32_t>(data);
-    case DType::kF32: return typed_range<float>(data);
+    case DType::kU8:
+      return typed_range<uint8_t>(data);
+    case DType::kI8:
+      return typed_range<int8_t>(data);
+    case DType::kU16:
+      return typed_range<uint16_t>(data);
+    case DType::kI16:
+      return typed_range<int16_t>(data);
+    case DType::kU32:
+      return typed_range<uint32_t>(data);
+    case DType::kI32:
+      return typed_range<int32_t>(data);
+    case DType::kF32:
+      return typed_range<float>(data);
   }
   return {0, 0};
 }
 
-bool near(double v, double target) { return std::abs(v - target) <= 0.02 * target; }
+bool near(double v, double target) {
+  return std::abs(v - target) <= 0.02 * target;
+}
 
 }  // namespace
 
@@ -80,7 +96,8 @@ Result<std::unique_ptr<ZarrChunkSource>> ZarrChunkSource::create(std::shared_ptr
       const uint32_t whole = static_cast<uint32_t>(std::lround(f));
       // The LOD traversal splits a chunk into 1 or 2 children per axis.
       const double prev = l == 0 ? 1.0 : double(s->levels_.back().downsample[a]);
-      ok = ok && levels[l].dims[a] > 0 && whole >= 1 && near(f, whole) && (l == 0 ? whole == 1 : near(f / prev, 1.0) || near(f / prev, 2.0));
+      ok = ok && levels[l].dims[a] > 0 && whole >= 1 && near(f, whole) &&
+           (l == 0 ? whole == 1 : near(f / prev, 1.0) || near(f / prev, 2.0));
       li.downsample[a] = whole;
       li.dims[a] = levels[l].dims[a];
       li.chunk_counts[a] = static_cast<uint32_t>((li.dims[a] + chunk_size - 1) / chunk_size);
@@ -168,7 +185,8 @@ Result<std::shared_ptr<const Chunk>> ZarrChunkSource::read(const ChunkKey& key) 
   for (int a = 0; a < 3; ++a) {
     src[a].resize(edge);
     const int64_t lo = static_cast<int64_t>(box.origin[a]), hi = lo + static_cast<int64_t>(box.size[a]);
-    for (uint32_t p = 0; p < edge; ++p) src[a][p] = static_cast<uint64_t>(std::clamp<int64_t>(first[a] + p, lo, hi - 1) - lo);
+    for (uint32_t p = 0; p < edge; ++p)
+      src[a][p] = static_cast<uint64_t>(std::clamp<int64_t>(first[a] + p, lo, hi - 1) - lo);
   }
   uint8_t* out = chunk->data.data();
   for (uint32_t z = 0; z < edge; ++z)

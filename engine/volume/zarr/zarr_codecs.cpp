@@ -136,8 +136,8 @@ Result<Bytes> lz4_encode(std::span<const uint8_t> in) {
   const int n = static_cast<int>(in.size());
   Bytes out(4 + size_t(LZ4_compressBound(n)));
   for (int i = 0; i < 4; ++i) out[i] = static_cast<uint8_t>(uint32_t(n) >> (8 * i));
-  const int got = LZ4_compress_default(reinterpret_cast<const char*>(in.data()), reinterpret_cast<char*>(out.data() + 4),
-                                       n, static_cast<int>(out.size() - 4));
+  const int got = LZ4_compress_default(reinterpret_cast<const char*>(in.data()),
+                                       reinterpret_cast<char*>(out.data() + 4), n, static_cast<int>(out.size() - 4));
   if (got <= 0) return internal_error("lz4: compression failed");
   out.resize(4 + size_t(got));
   return out;
@@ -146,7 +146,8 @@ Result<Bytes> lz4_encode(std::span<const uint8_t> in) {
 Result<Bytes> crc_decode(std::span<const uint8_t> in) {
   if (in.size() < 4) return corrupt("crc32c: shorter than its 4-byte checksum");
   const size_t n = in.size() - 4;
-  const uint32_t stored = uint32_t(in[n]) | uint32_t(in[n + 1]) << 8 | uint32_t(in[n + 2]) << 16 | uint32_t(in[n + 3]) << 24;
+  const uint32_t stored =
+      uint32_t(in[n]) | uint32_t(in[n + 1]) << 8 | uint32_t(in[n + 2]) << 16 | uint32_t(in[n + 3]) << 24;
   if (crc32c(in.first(n)) != stored) return corrupt("crc32c: checksum mismatch (the data is damaged)");
   return Bytes(in.begin(), in.begin() + static_cast<std::ptrdiff_t>(n));
 }
@@ -167,12 +168,18 @@ bool known_blosc_cname(const std::string& n) {
 
 const char* codec_name(CodecId id) {
   switch (id) {
-    case CodecId::kGzip: return "gzip";
-    case CodecId::kZlib: return "zlib";
-    case CodecId::kZstd: return "zstd";
-    case CodecId::kBlosc: return "blosc";
-    case CodecId::kLz4: return "lz4";
-    case CodecId::kCrc32c: return "crc32c";
+    case CodecId::kGzip:
+      return "gzip";
+    case CodecId::kZlib:
+      return "zlib";
+    case CodecId::kZstd:
+      return "zstd";
+    case CodecId::kBlosc:
+      return "blosc";
+    case CodecId::kLz4:
+      return "lz4";
+    case CodecId::kCrc32c:
+      return "crc32c";
   }
   return "?";
 }
@@ -258,10 +265,14 @@ Result<BytesCodec> parse_v3_bytes_codec(const nlohmann::json& j, const std::stri
     }
     if (cfg.contains("shuffle")) {
       const auto& s = cfg.at("shuffle");
-      if (s == "noshuffle") c.blosc_shuffle = 0;
-      else if (s == "shuffle") c.blosc_shuffle = 1;
-      else if (s == "bitshuffle") c.blosc_shuffle = 2;
-      else return invalid_argument(where + ": 'shuffle' must be noshuffle, shuffle or bitshuffle");
+      if (s == "noshuffle")
+        c.blosc_shuffle = 0;
+      else if (s == "shuffle")
+        c.blosc_shuffle = 1;
+      else if (s == "bitshuffle")
+        c.blosc_shuffle = 2;
+      else
+        return invalid_argument(where + ": 'shuffle' must be noshuffle, shuffle or bitshuffle");
     }
     VXR_ASSIGN_OR_RETURN(int ts, int_member(cfg, "typesize", 1, where));
     c.blosc_typesize = static_cast<uint32_t>(std::max(1, ts));
@@ -276,19 +287,26 @@ Result<BytesCodec> parse_v3_bytes_codec(const nlohmann::json& j, const std::stri
 Result<std::vector<uint8_t>> decode(const BytesCodec& c, std::span<const uint8_t> in, size_t expected) {
   switch (c.id) {
     case CodecId::kGzip:
-    case CodecId::kZlib: return inflate_any(in, expected, codec_name(c.id));
-    case CodecId::kZstd: return zstd_decode(in, expected);
-    case CodecId::kBlosc: return blosc_decode(in, expected);
-    case CodecId::kLz4: return lz4_decode(in, expected);
-    case CodecId::kCrc32c: return crc_decode(in);
+    case CodecId::kZlib:
+      return inflate_any(in, expected, codec_name(c.id));
+    case CodecId::kZstd:
+      return zstd_decode(in, expected);
+    case CodecId::kBlosc:
+      return blosc_decode(in, expected);
+    case CodecId::kLz4:
+      return lz4_decode(in, expected);
+    case CodecId::kCrc32c:
+      return crc_decode(in);
   }
   return internal_error("unknown codec");
 }
 
 Result<std::vector<uint8_t>> encode(const BytesCodec& c, std::span<const uint8_t> in) {
   switch (c.id) {
-    case CodecId::kGzip: return deflate_with(in, c.level, true);
-    case CodecId::kZlib: return deflate_with(in, c.level, false);
+    case CodecId::kGzip:
+      return deflate_with(in, c.level, true);
+    case CodecId::kZlib:
+      return deflate_with(in, c.level, false);
     case CodecId::kZstd: {
       Bytes out(ZSTD_compressBound(in.size()));
       const size_t n = ZSTD_compress(out.data(), out.size(), in.data(), in.size(), c.level);
@@ -296,8 +314,10 @@ Result<std::vector<uint8_t>> encode(const BytesCodec& c, std::span<const uint8_t
       out.resize(n);
       return out;
     }
-    case CodecId::kBlosc: return blosc_encode(c, in);
-    case CodecId::kLz4: return lz4_encode(in);
+    case CodecId::kBlosc:
+      return blosc_encode(c, in);
+    case CodecId::kLz4:
+      return lz4_encode(in);
     case CodecId::kCrc32c: {
       Bytes out(in.begin(), in.end());
       const uint32_t crc = crc32c(in);

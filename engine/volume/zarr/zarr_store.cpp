@@ -11,7 +11,9 @@ DirectoryStore::DirectoryStore(std::string root) : root_(std::move(root)) {
   while (root_.size() > 1 && root_.back() == '/') root_.pop_back();
 }
 
-std::string DirectoryStore::describe(const std::string& key) const { return key.empty() ? root_ : root_ + "/" + key; }
+std::string DirectoryStore::describe(const std::string& key) const {
+  return key.empty() ? root_ : root_ + "/" + key;
+}
 
 Result<std::optional<std::vector<uint8_t>>> DirectoryStore::get(const std::string& key, ByteRange range) const {
   // Keys come from metadata and chunk coordinates; refuse anything that could
