@@ -196,5 +196,12 @@ void main() {
     if (old + total < old) atomicAdd(samples_hi, 1u);
   }
   if ((flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), pack_ray(ray));
-  if ((flags & VXR_BRICK_STORE_FINAL) != 0u) imageStore(out_image, ivec2(pix), finish_ray(ray));
+  if ((flags & VXR_BRICK_STORE_FINAL) != 0u) {
+    vec4 c = finish_ray(ray);
+    if ((flags & VXR_BRICK_OPAQUE) != 0u) c.a = 1.0;  // premultiplied over black
+    // k / 255 converts to byte k under any rounding the conversion uses.
+    if ((flags & VXR_BRICK_QUANTIZE) != 0u) c = floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5) / 255.0;
+    if ((flags & VXR_BRICK_FINAL_FLOAT) != 0u) imageStore(accum_image, ivec2(pix), c);
+    else imageStore(out_image, ivec2(pix + p.control.xy), c);
+  }
 }

@@ -6,6 +6,7 @@
 #include "assets/assets.h"
 #include "golden.h"
 #include "gpu_fixture.h"
+#include "volume/dense_chunk_source.h"
 #include "xr/eye_renderer.h"
 #include "xr/view_session.h"
 #include "xr_test_util.h"
@@ -32,7 +33,10 @@ TEST_CASE("desktop: the window opens under Xvfb and the screenshot shows the vol
   // The same view offscreen: head at the start pose looking at the volume, +-40 degrees.
   auto volume = assets::sample_volume();
   REQUIRE(volume.is_ok());
-  auto eyes = EyeRenderer::create(test::gpu_context(), *volume);
+  std::vector<DenseVolume> channels{*volume};
+  auto source = DenseChunkSource::create(std::move(channels));
+  REQUIRE(source.is_ok());
+  auto eyes = EyeRenderer::create(test::gpu_context(), *source);
   REQUIRE(eyes.is_ok());
   ViewSpec view;
   view.pose.position = {0.0, 1.6, 0.0};

@@ -4,6 +4,7 @@
 
 #include "assets/assets.h"
 #include "gpu_fixture.h"
+#include "volume/dense_chunk_source.h"
 #include "xr/eye_renderer.h"
 #include "xr/view_session.h"
 
@@ -27,7 +28,10 @@ TEST_CASE("lens warp: 0.5625x the rays and under 2/255 mean error on the sample 
   test::GpuTestScope scope;
   auto volume = assets::sample_volume();
   REQUIRE(volume.is_ok());
-  auto eyes = EyeRenderer::create(test::gpu_context(), *volume);
+  std::vector<DenseVolume> channels{*volume};
+  auto source = DenseChunkSource::create(std::move(channels));
+  REQUIRE(source.is_ok());
+  auto eyes = EyeRenderer::create(test::gpu_context(), *source);
   REQUIRE(eyes.is_ok());
   const xr::VolumeTransform t = default_volume_transform((*eyes)->placement());
   ViewSpec view;

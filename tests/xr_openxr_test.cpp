@@ -8,6 +8,7 @@
 #include "assets/assets.h"
 #include "golden.h"
 #include "gpu_fixture.h"
+#include "volume/dense_chunk_source.h"
 #include "xr/openxr/openxr_target.h"
 #include "xr/target_factory.h"
 #include "xr/view_session.h"
@@ -36,7 +37,9 @@ Result<ViewStats> run(const DenseVolume& v, uint64_t frames) {
   ViewOptions o;
   o.frames = frames;
   o.settings = default_view_settings();
-  return run_view(openxr(), v, o, default_volume_transform({v.dims, v.voxel_size}));
+  auto source = DenseChunkSource::create({v});
+  if (!source) return source.status();
+  return run_view(openxr(), *source, o, default_volume_transform({v.dims, v.voxel_size}));
 }
 
 bool has_state(const nlohmann::json& session, const std::string& state) {

@@ -29,6 +29,7 @@
 #include "render/raycaster.h"
 #include "render/reference_renderer.h"
 #include "render/transfer_function.h"
+#include "render/volume_session.h"
 #include "scene/render_settings.h"
 #include "volume/container_reader.h"
 #include "volume/load_dense.h"
@@ -63,32 +64,6 @@ struct Resolved {
 };
 
 bool starts_with(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
-
-// `procedural:vessels:SIDE[:SEED]`: the synthetic vessel volume of `vxr bench
-// lod`, SIDE^3 voxels (up to 131072), generated on demand.
-Result<std::unique_ptr<ProceduralSource>> open_procedural(const std::string& spec) {
-  std::vector<std::string> parts;
-  std::stringstream ss(spec);
-  std::string item;
-  while (std::getline(ss, item, ':')) parts.push_back(item);
-  auto bad = [&](const std::string& why) {
-    return invalid_argument("input '" + spec + "': " + why + "; use procedural:vessels:SIDE[:SEED], e.g. procedural:vessels:65536");
-  };
-  if (parts.size() < 3 || parts.size() > 4 || parts[1] != "vessels") return bad("unknown procedural source");
-  ProceduralOptions po;
-  char* end = nullptr;
-  const unsigned long long side = std::strtoull(parts[2].c_str(), &end, 10);
-  if (parts[2].empty() || *end != '\0' || side == 0 || side > (1ull << 17)) return bad("SIDE must be 1..131072 voxels");
-  po.dims = {side, side, side};
-  if (parts.size() == 4) {
-    po.seed = std::strtoull(parts[3].c_str(), &end, 10);
-    if (parts[3].empty() || *end != '\0') return bad("SEED must be a whole number");
-  }
-  po.noise_max = 6;  // as `vxr bench lod`: faint background below the default window
-  auto src = ProceduralSource::create(po);
-  if (!src) return bad(src.status().message());
-  return src;
-}
 
 bool parse_doubles(const std::string& text, size_t n, std::vector<double>& out) {
   out.clear();

@@ -1,14 +1,17 @@
 // `vxr view [INPUT]`: explore a volume in a headset (OpenXR), a desktop
-// window, or headless, and say which.
+// window, or headless, and say which. Only flags live here: the session
+// (source, settings) is render/volume_session.h, the frame loop
+// xr/view_session.h.
 //
 // Auto choice: OpenXR when a runtime answers and has a headset, else the
 // desktop window when a display is there, else headless. --xr / --desktop /
 // --headless force one; --frames N renders N frames and exits cleanly.
 #include <cstdio>
+#include <nlohmann/json.hpp>
 
-#include "assets/assets.h"
 #include "command.h"
-#include "volume/load_dense.h"
+#include "core/output_file.h"
+#include "render/volume_session.h"
 #include "xr/headless/headless_target.h"
 #include "xr/target_factory.h"
 #include "xr/view_session.h"
@@ -29,30 +32,25 @@ struct Options {
   std::string screenshot;
   bool mirror = false;
   uint32_t width = 0, height = 0;
+  double frame_budget_ms = 0.0, lod_bias = 0.0;
+  std::string json;
+  SessionFlags flags;
 };
 
-// The whole-volume caster takes one 3D texture: a .vxc gives the finest
-// pyramid level that fits, any other input is read whole and averaged down to
-// fit (load_for_render, shared with `vxr render`); channel 0, timepoint 0.
-Result<DenseVolume> load_input(const Options& o) {
-  if (o.sample || o.input.empty()) return assets::sample_volume();
-  VXR_ASSIGN_OR_RETURN(LoadedVolume loaded, load_for_render(o.input, 1024, uint64_t(1) << 30));
-  for (const std::string& n : loaded.notes) std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
-  if (loaded.channels.size() > 1)
-    std::fprintf(stderr, "vxr view: %s: showing channel 0 of %zu\n", o.input.c_str(), loaded.channels.size());
-  if (loaded.channels[0].dtype != DType::kU8 && loaded.channels[0].dtype != DType::kU16)
-    return unsupported(o.input + ": vxr view shows u8 or u16 data, this is " + dtype_name(loaded.channels[0].dtype) +
-                       "; convert it first");
-  return std::move(loaded.channels[0]);
-}
-
 int run(const Options& o) {
-  auto volume = load_input(o);
-  if (!volume) {
-    const ErrorCode c = volume.status().code();  // a wrong path or argument is a usage error
-    return fail(volume.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage
-                                                                                                 : kExitFailure);
+  if (o.frame_budget_ms < 0.0) return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
+  if (!o.json.empty()) {
+    const std::string inputs[] = {o.input};
+    if (Status st = check_output(o.json, inputs, "--json"); !st) return fail(st, kExitUsage);
   }
+  auto session = open_volume_session(o.sample ? "" : o.input, o.flags);
+  if (!session) {
+    const ErrorCode c = session.status().code();  // a wrong path or argument is a usage error
+    return fail(session.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage
+                                                                                                  : kExitFailure);
+  }
+  for (const std::string& n : session->notes)
+    std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
   xr::TargetRequest req;
   req.kind = o.force_xr        ? xr::TargetKind::kOpenXr
              : o.force_desktop ? xr::TargetKind::kDesktop
@@ -80,11 +78,20 @@ int run(const Options& o) {
 
   xr::ViewOptions vo;
   vo.frames = o.frames;
-  vo.settings = xr::default_view_settings();
+  vo.settings = session->settings;
   vo.warp.enabled = o.lens_warp;
-  const VolumePlacement placement{volume->dims, volume->voxel_size};
-  auto stats = xr::run_view(choice->factory, *volume, vo, xr::default_volume_transform(placement));
+  vo.frame.lod.lod_bias = o.lod_bias;
+  vo.frame_budget_ms = o.frame_budget_ms;
+  const VolumeInfo& info = session->source->info();
+  const VolumePlacement placement{{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])},
+                                  info.voxel_size};
+  auto stats = xr::run_view(choice->factory, session->source, vo, xr::default_volume_transform(placement));
   if (!stats) return fail(stats.status());
+  if (!o.json.empty()) {
+    nlohmann::json j = xr::view_stats_json(*stats, vo);
+    j["input"] = session->description;
+    if (Status st = write_file_atomically(o.json, j.dump(2) + "\n"); !st) return fail(st);
+  }
   std::printf("vxr view: %llu frames rendered on %s, %.2f ms mean, %.2f ms max per frame, %d restart(s)\n",
               static_cast<unsigned long long>(stats->frames_rendered), stats->target.c_str(), stats->mean_frame_ms,
               stats->max_frame_ms, stats->restarts);
@@ -100,7 +107,8 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   auto* cmd = app.add_subcommand("view", "explore a volume in a headset (OpenXR), a desktop window, or headless");
   auto o = std::make_shared<Options>();
   cmd->add_option("input", o->input,
-                  "dataset to view: anything vxr imports, up to 1024 per side (default: the bundled sample)");
+                  "dataset to view: a .vxc, anything vxr imports, or procedural:vessels:SIDE (default: the bundled "
+                  "sample)");
   cmd->add_flag("--sample", o->sample, "view the bundled sample volume (an MRI head)");
   auto* fx = cmd->add_flag("--xr", o->force_xr, "use OpenXR (fail if no runtime or headset)");
   auto* fd = cmd->add_flag("--desktop", o->force_desktop, "use a desktop window");
@@ -118,6 +126,15 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_flag("--stereo", o->stereo, "desktop: side-by-side stereo");
   cmd->add_flag("--mirror", o->mirror, "OpenXR: also show both eyes in a desktop window");
   cmd->add_option("--screenshot", o->screenshot, "desktop/mirror: at exit, save what the X server shows in the window (PNG)");
+  cmd->add_option("--frame-budget-ms", o->frame_budget_ms,
+                  "let the LOD bias follow the frame time towards this many milliseconds");
+  cmd->add_option("--lod-bias", o->lod_bias, "log2 voxel-to-pixel ratio (start value with --frame-budget-ms)");
+  cmd->add_option("--json", o->json,
+                  "write frame figures here: p50/p99 frame ms, frames complete, pipelines after frame 1, readbacks");
+  cmd->add_option("--colormap", o->flags.colormap, "colormap name (default hot)");
+  cmd->add_option("--window", o->flags.window, "LO,HI data window (default: from the data)");
+  cmd->add_option("--model", o->flags.model, "optical model: ea, emission or mip");
+  cmd->add_option("--step", o->flags.step, "samples every STEP voxels (default 0.5)");
   cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
 }
 

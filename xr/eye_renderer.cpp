@@ -24,64 +24,140 @@ void image_barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect
   vkCmdPipelineBarrier2(cmd, &dep);
 }
 
-Result<std::unique_ptr<EyeRenderer>> EyeRenderer::create(gpu::Context& ctx, const DenseVolume& volume) {
+Result<std::unique_ptr<EyeRenderer>> EyeRenderer::create(gpu::Context& ctx, std::shared_ptr<const ChunkSource> source,
+                                                         ChunkCache* stream_from) {
+  if (!source) return invalid_argument("eye renderer: no volume");
   std::unique_ptr<EyeRenderer> r(new EyeRenderer(ctx));
-  VXR_ASSIGN_OR_RETURN(r->caster_, Raycaster::create(ctx));
-  VXR_RETURN_IF_ERROR(r->caster_->set_volume(volume));
-  r->placement_ = {volume.dims, volume.voxel_size};
+  r->source_ = std::move(source);
+  BrickRendererOptions o;
+  o.stream_from = stream_from;
+  o.preload_if_fits = true;
+  VXR_ASSIGN_OR_RETURN(r->renderer_, BrickRenderer::create(ctx, *r->source_, o));
   return r;
 }
 
-Result<ImageRgba8> EyeRenderer::render(const ViewSpec& view, const VolumeTransform& t,
-                                       const RenderSettings& settings, const LensWarp& warp, uint64_t* rays) {
-  VXR_TRACE_SCOPE("xr.render_view");
-  const Camera camera = camera_for_view(view, t);
-  if (warp.enabled) return render_lens_warped(*caster_, camera, settings, view.width, view.height, warp, rays);
-  if (rays) *rays = uint64_t(view.width) * view.height;
-  return caster_->render(camera, settings, view.width, view.height);
+Result<gpu::Image*> EyeRenderer::warp_image(size_t index, uint32_t width, uint32_t height, VkFormat format) {
+  if (warped_.size() <= index) warped_.resize(index + 1);
+  gpu::Image& img = warped_[index];
+  if (img.image && img.extent.width == width && img.extent.height == height && img.format == format) return &img;
+  VkImageUsageFlags usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  // RGBA8: the rays write it; float (sRGB targets): filled by blits, sampled only by the view's creation rules.
+  usage |= format == VK_FORMAT_R8G8B8A8_UNORM ? VK_IMAGE_USAGE_STORAGE_BIT : VK_IMAGE_USAGE_SAMPLED_BIT;
+  // Made at the first frame (or when the eye size changes), not per frame.
+  VXR_ASSIGN_OR_RETURN(img, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, format, {width, height, 1}, usage,
+                                                     "lens-warped eye"}));
+  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+    gpu::transition_image(cmd, img, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                          VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                          VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+  }));
+  return &img;
 }
 
-Status EyeRenderer::upload(const TargetImage& target, const ImageRgba8& image) {
-  VXR_TRACE_SCOPE("xr.upload_view");
-  if (target.extent.width != image.width || target.extent.height != image.height)
+Status EyeRenderer::record(VkCommandBuffer cmd, size_t index, const ViewSpec& view, const VolumeTransform& t,
+                           const RenderSettings& settings, const BrickFrameSettings& frame, const LensWarp& warp,
+                           const TargetImage& target, uint64_t* rays, BrickFrameStats* stats) {
+  VXR_TRACE_SCOPE("xr.record_view");
+  if (target.extent.width != view.width || target.extent.height != view.height)
     return invalid_argument("target image is " + std::to_string(target.extent.width) + "x" +
-                            std::to_string(target.extent.height) + ", the view was rendered at " +
-                            std::to_string(image.width) + "x" + std::to_string(image.height));
-  bool bgra = false;
-  switch (target.format) {
-    case VK_FORMAT_R8G8B8A8_UNORM:
-    case VK_FORMAT_R8G8B8A8_SRGB: break;
-    case VK_FORMAT_B8G8R8A8_UNORM:
-    case VK_FORMAT_B8G8R8A8_SRGB: bgra = true; break;
-    default: return unsupported("target image format " + std::to_string(target.format) + " is not 8-bit RGBA/BGRA");
+                            std::to_string(target.extent.height) + ", the view is " + std::to_string(view.width) +
+                            "x" + std::to_string(view.height));
+  const Camera camera = camera_for_view(view, t);
+  const WarpAxis ax = warp_axis(view.width, warp), ay = warp_axis(view.height, warp);
+  RenderTarget out{target.image, target.storage_view, target.format, target.extent, target.layout};
+  out.opaque = true;
+  if (!warp.enabled || (ax.warped() == view.width && ay.warped() == view.height)) {
+    if (rays) *rays = uint64_t(view.width) * view.height;
+    return renderer_->record_view(cmd, camera, settings, frame, out, stats);
   }
-  const VkDeviceSize bytes = image.pixels.size();
-  if (!staging_.buffer || staging_.size < bytes) {
-    VXR_ASSIGN_OR_RETURN(staging_, gpu::create_buffer(ctx_, {bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                                             gpu::MemoryIntent::kUpload, "eye staging"}));
+  if (!camera.frustum) return invalid_argument("lens warp: the view needs an off-axis frustum");
+
+  // The tiles: each band pair is an ordinary off-axis frustum (see lens_warp.h).
+  const VkFormat wf = is_unorm8(target.format) ? VK_FORMAT_R8G8B8A8_UNORM : VK_FORMAT_R32G32B32A32_SFLOAT;
+  VXR_ASSIGN_OR_RETURN(gpu::Image * wimg, warp_image(index, ax.warped(), ay.warped(), wf));
+  const FrustumTangents& ft = *camera.frustum;
+  const uint32_t width = view.width, height = view.height;
+  auto tan_x = [&](double p) { return ft.left + p / width * (ft.right - ft.left); };
+  auto tan_y = [&](double p) { return ft.up - p / height * (ft.up - ft.down); };
+  const uint32_t xs_full[4] = {0, ax.edge_full, ax.edge_full + ax.centre, width};
+  const uint32_t ys_full[4] = {0, ay.edge_full, ay.edge_full + ay.centre, height};
+  const uint32_t xs_warp[4] = {0, ax.edge_warped, ax.edge_warped + ax.centre, ax.warped()};
+  const uint32_t ys_warp[4] = {0, ay.edge_warped, ay.edge_warped + ay.centre, ay.warped()};
+  BrickFrameStats sum;
+  uint64_t cast = 0;
+  std::vector<VkImageBlit> blits;
+  for (int by = 0; by < 3; ++by)
+    for (int bx = 0; bx < 3; ++bx) {
+      const uint32_t w = xs_warp[bx + 1] - xs_warp[bx], h = ys_warp[by + 1] - ys_warp[by];
+      if (w == 0 || h == 0) continue;
+      Camera tile = camera;
+      tile.frustum = FrustumTangents{tan_x(xs_full[bx]), tan_x(xs_full[bx + 1]), tan_y(ys_full[by + 1]),
+                                     tan_y(ys_full[by])};
+      RenderTarget part{wimg->image, wf == VK_FORMAT_R8G8B8A8_UNORM ? wimg->view.get() : VK_NULL_HANDLE, wf,
+                        {wimg->extent.width, wimg->extent.height}, VK_IMAGE_LAYOUT_GENERAL};
+      part.rect = {{int32_t(xs_warp[bx]), int32_t(ys_warp[by])}, {w, h}};
+      part.opaque = true;
+      BrickFrameStats st;
+      VXR_RETURN_IF_ERROR(renderer_->record_view(cmd, tile, settings, frame, part, &st));
+      sum.lod.visited += st.lod.visited;
+      sum.lod.drawn += st.lod.drawn;
+      sum.lod.fallback += st.lod.fallback;
+      sum.lod.missing += st.lod.missing;
+      sum.lod.culled += st.lod.culled;
+      sum.lod.skipped_empty += st.lod.skipped_empty;
+      sum.traverse_ms += st.traverse_ms;
+      sum.dispatches += st.dispatches;
+      sum.bricks_uploaded = st.bricks_uploaded;
+      sum.bytes_uploaded = st.bytes_uploaded;
+      cast += uint64_t(w) * h;
+      VkImageBlit b{};
+      b.srcSubresource = b.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+      b.srcOffsets[0] = {int32_t(xs_warp[bx]), int32_t(ys_warp[by]), 0};
+      b.srcOffsets[1] = {int32_t(xs_warp[bx + 1]), int32_t(ys_warp[by + 1]), 1};
+      b.dstOffsets[0] = {int32_t(xs_full[bx]), int32_t(ys_full[by]), 0};
+      b.dstOffsets[1] = {int32_t(xs_full[bx + 1]), int32_t(ys_full[by + 1]), 1};
+      blits.push_back(b);
+    }
+  // Resample: the bands stretched onto the eye's pixels (bilinear, like resample_warped).
+  const VkImageLayout final_layout =
+      target.layout == VK_IMAGE_LAYOUT_UNDEFINED ? VK_IMAGE_LAYOUT_GENERAL : target.layout;
+  image_barrier(cmd, wimg->image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_GENERAL,
+                VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+  image_barrier(cmd, target.image, VK_IMAGE_ASPECT_COLOR_BIT, target.layout, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+  vkCmdBlitImage(cmd, wimg->image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target.image,
+                 VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, static_cast<uint32_t>(blits.size()), blits.data(),
+                 VK_FILTER_LINEAR);
+  image_barrier(cmd, target.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, final_layout);
+  image_barrier(cmd, wimg->image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                VK_IMAGE_LAYOUT_GENERAL);
+  if (rays) *rays = cast;
+  if (stats) *stats = sum;
+  return Status::ok();
+}
+
+Result<ImageRgba8> EyeRenderer::render(const ViewSpec& view, const VolumeTransform& t, const RenderSettings& settings,
+                                       const LensWarp& warp, uint64_t* rays) {
+  VXR_TRACE_SCOPE("xr.render_view");
+  if (!offscreen_.image || offscreen_.extent.width != view.width || offscreen_.extent.height != view.height) {
+    VXR_ASSIGN_OR_RETURN(offscreen_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, VK_FORMAT_R8G8B8A8_UNORM,
+                                                              {view.width, view.height, 1},
+                                                              VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                                                                  VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                                              "offscreen eye"}));
   }
-  auto* dst = static_cast<uint8_t*>(staging_.mapped);
-  for (size_t i = 0; i < bytes; i += 4) {
-    dst[i + 0] = image.pixels[i + (bgra ? 2 : 0)];
-    dst[i + 1] = image.pixels[i + 1];
-    dst[i + 2] = image.pixels[i + (bgra ? 0 : 2)];
-    dst[i + 3] = 255;  // premultiplied over black: opaque
-  }
-  if (!staging_.host_coherent) {
-    VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
-    range.memory = staging_.memory;
-    range.size = VK_WHOLE_SIZE;
-    vkFlushMappedMemoryRanges(ctx_.device(), 1, &range);
-  }
-  return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-    image_barrier(cmd, target.image, VK_IMAGE_ASPECT_COLOR_BIT, target.layout, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-    VkBufferImageCopy region{};
-    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    region.imageExtent = {image.width, image.height, 1};
-    vkCmdCopyBufferToImage(cmd, staging_.buffer, target.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
-    image_barrier(cmd, target.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                  target.layout == VK_IMAGE_LAYOUT_UNDEFINED ? VK_IMAGE_LAYOUT_GENERAL : target.layout);
-  });
+  const TargetImage target{offscreen_.image, offscreen_.format, {view.width, view.height}, VK_IMAGE_LAYOUT_UNDEFINED,
+                           offscreen_.view};
+  Status recorded = Status::ok();
+  const BrickFrameSettings frame;
+  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+    recorded = renderer_->begin_frame(cmd, frame);
+    if (recorded) recorded = record(cmd, 0, view, t, settings, frame, warp, target, rays);
+  }));
+  VXR_RETURN_IF_ERROR(recorded);
+  offscreen_.layout = VK_IMAGE_LAYOUT_GENERAL;
+  ImageRgba8 img(view.width, view.height);
+  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, offscreen_, img.pixels.data(), img.pixels.size()));
+  return img;
 }
 
 }  // namespace vxr::xr

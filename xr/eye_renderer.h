@@ -1,17 +1,20 @@
-// Renders one view of the volume for a FrameTarget and copies it into the
-// target's image.
+// Records the views of a frame through the out-of-core renderer
+// (VolumeRenderer, implemented by BrickRenderer) into a FrameTarget's images:
+// the frame loop records every eye, lens-warp tiles included, into one
+// command buffer and submits it once; nothing is read back.
 //
-// Uses the ray caster's public API (render() returns the picture on the CPU),
-// then uploads it into the target's VkImage through a staging buffer. At the
-// eye sizes vxr uses on lavapipe this round trip costs well under a
-// millisecond; a GPU-resident path can replace upload() without touching
-// the targets.
+// Lens warp: the 3x3 tiles of the warped grid (xr/lens_warp.h) are views
+// into one intermediate image per eye (RGBA8 for 8-bit UNORM targets, float
+// for the others so an sRGB target encodes unrounded linear values), then
+// nine linear-filtered blits stretch the bands onto the eye's pixels; the
+// centre band is a 1:1 copy.
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "gpu/resources.h"
-#include "render/raycaster.h"
+#include "render/lod/brick_renderer.h"
 #include "xr/frame_target.h"
 #include "xr/lens_warp.h"
 #include "xr/volume_transform.h"
@@ -20,24 +23,40 @@ namespace vxr::xr {
 
 class EyeRenderer {
  public:
-  static Result<std::unique_ptr<EyeRenderer>> create(gpu::Context& ctx, const DenseVolume& volume);
+  // `stream_from` (may be null): the cache whose loader threads read missing
+  // bricks; null reads them after each render() (tests). Small volumes are
+  // preloaded whole.
+  static Result<std::unique_ptr<EyeRenderer>> create(gpu::Context& ctx, std::shared_ptr<const ChunkSource> source,
+                                                     ChunkCache* stream_from = nullptr);
 
-  // Premultiplied RGBA of `view`; `rays` receives the rays cast.
+  Status begin_frame(VkCommandBuffer cmd, const BrickFrameSettings& frame) {
+    return renderer_->begin_frame(cmd, frame);
+  }
+  // Records view `index` of the frame into `target` (shown over black: alpha
+  // 1). `rays` receives the rays cast, `stats` the view's LOD figures (summed
+  // over lens-warp tiles).
+  Status record(VkCommandBuffer cmd, size_t index, const ViewSpec& view, const VolumeTransform& t,
+                const RenderSettings& settings, const BrickFrameSettings& frame, const LensWarp& warp,
+                const TargetImage& target, uint64_t* rays = nullptr, BrickFrameStats* stats = nullptr);
+
+  // Tests and benchmarks: one frame of one view into an offscreen RGBA8
+  // image, submitted, waited for and read back (opaque, over black).
   Result<ImageRgba8> render(const ViewSpec& view, const VolumeTransform& t, const RenderSettings& settings,
                             const LensWarp& warp, uint64_t* rays = nullptr);
 
-  // Copies `image` (shown over black, opaque) into `target`, which must be
-  // `image`'s size, an 8-bit RGBA or BGRA format and allow transfer writes.
-  Status upload(const TargetImage& target, const ImageRgba8& image);
-
-  const VolumePlacement& placement() const { return placement_; }
+  VolumePlacement placement() const { return renderer_->placement(); }
+  BrickRenderer& renderer() { return *renderer_; }
 
  private:
   explicit EyeRenderer(gpu::Context& ctx) : ctx_(ctx) {}
+  // The warped intermediate of view `index`, (re)made at this size and format.
+  Result<gpu::Image*> warp_image(size_t index, uint32_t width, uint32_t height, VkFormat format);
+
   gpu::Context& ctx_;
-  std::unique_ptr<Raycaster> caster_;
-  VolumePlacement placement_;
-  gpu::Buffer staging_;
+  std::shared_ptr<const ChunkSource> source_;
+  std::unique_ptr<BrickRenderer> renderer_;
+  std::vector<gpu::Image> warped_;  // per view index
+  gpu::Image offscreen_;            // render()'s target
 };
 
 // Records a whole-image layout change with full (ALL_COMMANDS) dependencies:

@@ -36,6 +36,9 @@ struct TargetImage {
   VkFormat format = VK_FORMAT_UNDEFINED;
   VkExtent2D extent{0, 0};
   VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;
+  // A view with STORAGE usage when the target made the image with it: the
+  // ray caster then writes RGBA8 UNORM pixels directly (else through a blit).
+  VkImageView storage_view = VK_NULL_HANDLE;
 };
 
 struct FrameState {

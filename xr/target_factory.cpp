@@ -26,6 +26,7 @@ TargetFactory openxr_factory(const TargetRequest& r) {
   o.readable = mirror;
   DesktopOptions window = desktop_options(r);
   window.stereo = true;  // both eyes side by side
+  window.srgb_swapchain = true;  // the headset's swapchains are sRGB when the runtime offers it
   window.end_frame = 0;
   return [o, mirror, window]() -> Result<std::unique_ptr<FrameTarget>> {
     auto t = OpenXrTarget::create(o);

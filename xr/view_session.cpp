@@ -1,9 +1,13 @@
 #include "xr/view_session.h"
 
+#include <algorithm>
 #include <chrono>
+#include <nlohmann/json.hpp>
 
 #include "core/log.h"
 #include "core/trace.h"
+#include "gpu/resources.h"
+#include "gpu/vk_check.h"
 #include "xr/eye_renderer.h"
 
 namespace vxr::xr {
@@ -11,28 +15,78 @@ namespace {
 
 enum class Outcome { kDone, kRestart };
 
+// The frame's one command buffer and the fence its submission signals.
+struct FrameCommands {
+  gpu::Handle<VkCommandPool> pool;
+  gpu::Handle<VkFence> fence;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+
+  Status create(gpu::Context& ctx) {
+    VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+    pci.queueFamilyIndex = ctx.queue_family();
+    VkCommandPool p = VK_NULL_HANDLE;
+    VXR_VK_TRY(vkCreateCommandPool(ctx.device(), &pci, nullptr, &p));
+    pool = gpu::Handle<VkCommandPool>(ctx.device(), p);
+    VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    ai.commandPool = pool;
+    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    ai.commandBufferCount = 1;
+    VXR_VK_TRY(vkAllocateCommandBuffers(ctx.device(), &ai, &cmd));
+    VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    VkFence f = VK_NULL_HANDLE;
+    VXR_VK_TRY(vkCreateFence(ctx.device(), &fci, nullptr, &f));
+    fence = gpu::Handle<VkFence>(ctx.device(), f);
+    return Status::ok();
+  }
+  Status begin() {
+    VXR_VK_TRY(vkResetCommandBuffer(cmd, 0));
+    VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    VXR_VK_TRY(vkBeginCommandBuffer(cmd, &bi));
+    return Status::ok();
+  }
+  // Submits and waits: the swapchain images are released (and the next frame
+  // reuses the renderer's per-frame buffers) only after the rays have run.
+  Status submit_and_wait(gpu::Context& ctx) {
+    VXR_VK_TRY(vkEndCommandBuffer(cmd));
+    VkFence f = fence;
+    VXR_VK_TRY(vkResetFences(ctx.device(), 1, &f));
+    VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    si.commandBufferCount = 1;
+    si.pCommandBuffers = &cmd;
+    VXR_VK_TRY(vkQueueSubmit(ctx.queue(), 1, &si, f));
+    VXR_VK_TRY(vkWaitForFences(ctx.device(), 1, &f, VK_TRUE, UINT64_MAX));
+    return Status::ok();
+  }
+};
+
 // One run of a target: returns kRestart when the target lost its session.
-Result<Outcome> run_once(FrameTarget& target, const DenseVolume& volume, const ViewOptions& options,
-                         GrabInteraction& grab, ViewStats& stats) {
+Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkSource>& source,
+                         const ViewOptions& options, GrabInteraction& grab, FrameBudget& budget, ViewStats& stats) {
   gpu::ContextOptions copts = gpu::ContextOptions::from_env();
   VXR_RETURN_IF_ERROR(target.prepare_context(copts));
   VXR_ASSIGN_OR_RETURN(std::unique_ptr<gpu::Context> ctx, gpu::Context::create(copts));
   stats.device_fingerprint = ctx->info().fingerprint();
-  // Everything tied to the device goes before it: renderer, then the target's objects.
+  // Everything tied to the device goes before it: renderer and cache, then the target's objects.
   struct Detach {
     FrameTarget& t;
     ~Detach() { t.detach(); }
   };
+  FrameCommands commands;
   std::unique_ptr<EyeRenderer> eyes;
   Detach detach{target};
+  ChunkCache cache(source, {options.cache_bytes, options.loader_threads});
   VXR_RETURN_IF_ERROR(target.attach(*ctx));
-  VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, volume));
+  VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, source, &cache));
+  // Pool changes the settings need (apron 2 for gradients) before any frame records.
+  VXR_RETURN_IF_ERROR(eyes->renderer().prepare(options.settings));
+  VXR_RETURN_IF_ERROR(commands.create(*ctx));
   stats.target = target.describe();
 
   bool exit_requested = false;
   int64_t last_display_ns = 0;
   double total_ms = 0.0;
-  uint64_t timed = 0;
   for (;;) {
     VXR_TRACE_SCOPE("xr.frame");
     auto frame = target.wait_frame();
@@ -42,6 +96,7 @@ Result<Outcome> run_once(FrameTarget& target, const DenseVolume& volume, const V
       return Outcome::kDone;
     }
     const auto t0 = std::chrono::steady_clock::now();
+    const uint64_t readbacks_before = gpu::readback_count();
 
     // Seconds since the last frame's display time, for thumbstick flight (capped: a stall is not a jump).
     const double dt = last_display_ns > 0 && frame->display_time_ns > last_display_ns
@@ -52,31 +107,48 @@ Result<Outcome> run_once(FrameTarget& target, const DenseVolume& volume, const V
     for (int h = 0; h < 2; ++h)
       if (started[h]) target.haptic_pulse(Hand(h), 0.5, 0.02);
 
-    std::vector<ImageRgba8> images;
+    BrickFrameSettings fs = options.frame;
+    if (options.frame_budget_ms > 0.0) fs.lod.lod_bias = budget.bias;
+    size_t views_drawn = 0;
+    uint64_t missing = 0;
     if (frame->should_render) {
+      VXR_RETURN_IF_ERROR(commands.begin());
+      VXR_RETURN_IF_ERROR(eyes->begin_frame(commands.cmd, fs));
       for (size_t v = 0; v < frame->views.size(); ++v) {
-        uint64_t rays = 0;
-        VXR_ASSIGN_OR_RETURN(ImageRgba8 img,
-                             eyes->render(frame->views[v], stats.transform, options.settings, options.warp, &rays));
-        stats.rays += rays;
         auto image = target.acquire(v);
         if (!image) return target.wants_restart() ? Result<Outcome>(Outcome::kRestart) : image.status();
-        VXR_RETURN_IF_ERROR(eyes->upload(*image, img));
-        images.push_back(std::move(img));
+        uint64_t rays = 0;
+        BrickFrameStats st;
+        VXR_RETURN_IF_ERROR(eyes->record(commands.cmd, v, frame->views[v], stats.transform, options.settings, fs,
+                                         options.warp, *image, &rays, &st));
+        stats.rays += rays;
+        missing += st.lod.missing;
+        if (v == 0) stats.bricks_uploaded += st.bricks_uploaded;
+        ++views_drawn;
       }
+      VXR_RETURN_IF_ERROR(commands.submit_and_wait(*ctx));
     }
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     FrameContent content;
     content.focus_point = stats.transform.position;
     if (Status s = target.end_frame(*frame, content); !s)
       return target.wants_restart() ? Result<Outcome>(Outcome::kRestart) : Result<Outcome>(s);
     ++stats.frames_submitted;
     if (frame->should_render) {
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      stats.readbacks += gpu::readback_count() - readbacks_before;
       total_ms += ms;
-      ++timed;
+      stats.frame_ms.push_back(ms);
+      stats.lod_bias.push_back(fs.lod.lod_bias);
       stats.max_frame_ms = std::max(stats.max_frame_ms, ms);
-      stats.mean_frame_ms = total_ms / double(timed);
-      if (options.on_frame) options.on_frame(stats.frames_rendered, images);
+      stats.mean_frame_ms = total_ms / double(stats.frame_ms.size());
+      if (views_drawn == frame->views.size() && views_drawn > 0) {
+        ++stats.frames_complete;
+        if (missing == 0) ++stats.frames_full_detail;
+      }
+      if (options.frame_budget_ms > 0.0) budget.update(ms);
+      if (stats.frames_rendered == 0) stats.pipelines_first_frame = ctx->pipelines_built();
+      stats.pipelines_after_first_frame = ctx->pipelines_built() - stats.pipelines_first_frame;
+      if (options.on_frame) options.on_frame(stats.frames_rendered);
       ++stats.frames_rendered;
     }
     if (options.frames > 0 && stats.frames_rendered >= options.frames && !exit_requested) {
@@ -86,27 +158,62 @@ Result<Outcome> run_once(FrameTarget& target, const DenseVolume& volume, const V
   }
 }
 
-}  // namespace
-
-RenderSettings default_view_settings() {
-  RenderSettings s;
-  s.channels[0].colormap = "hot";
-  s.channels[0].window_lo = 20;
-  s.channels[0].window_hi = 220;
-  s.step_voxels = 0.5;
-  s.density = 0.08;
-  return s;
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t i = std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5));
+  return v[i];
 }
 
-Result<ViewStats> run_view(const TargetFactory& make_target, const DenseVolume& volume, const ViewOptions& options,
-                           const VolumeTransform& initial) {
+}  // namespace
+
+nlohmann::json view_stats_json(const ViewStats& s, const ViewOptions& o) {
+  nlohmann::json j;
+  j["target"] = s.target;
+  j["device"] = s.device_fingerprint;
+  j["frames_rendered"] = s.frames_rendered;
+  j["frames_complete"] = s.frames_complete;
+  j["frames_full_detail"] = s.frames_full_detail;
+  j["restarts"] = s.restarts;
+  j["p50_frame_ms"] = percentile(s.frame_ms, 0.50);
+  j["p99_frame_ms"] = percentile(s.frame_ms, 0.99);
+  j["mean_frame_ms"] = s.mean_frame_ms;
+  j["max_frame_ms"] = s.max_frame_ms;
+  j["frame_budget_ms"] = o.frame_budget_ms;
+  if (o.frame_budget_ms > 0.0) {
+    // The controller needs a few frames to find the bias: judge the second half.
+    std::vector<double> tail(s.frame_ms.begin() + std::ptrdiff_t(s.frame_ms.size() / 2), s.frame_ms.end());
+    j["p50_frame_ms_second_half"] = percentile(tail, 0.50);
+    size_t within = 0;
+    for (double ms : tail) within += ms <= o.frame_budget_ms ? 1 : 0;
+    j["second_half_within_budget"] = tail.empty() ? 0.0 : double(within) / double(tail.size());
+    j["final_lod_bias"] = s.lod_bias.empty() ? 0.0 : s.lod_bias.back();
+  }
+  j["pipelines_first_frame"] = s.pipelines_first_frame;
+  j["pipelines_after_first_frame"] = s.pipelines_after_first_frame;
+  j["readbacks_per_frame"] = s.frames_rendered ? double(s.readbacks) / double(s.frames_rendered) : 0.0;
+  j["submits_per_frame"] = 1;
+  j["rays"] = s.rays;
+  j["bricks_uploaded"] = s.bricks_uploaded;
+  j["lens_warp"] = o.warp.enabled;
+  j["frame_ms"] = s.frame_ms;
+  return j;
+}
+
+Result<ViewStats> run_view(const TargetFactory& make_target, std::shared_ptr<const ChunkSource> source,
+                           const ViewOptions& options, const VolumeTransform& initial) {
+  if (!source) return invalid_argument("view: no volume");
+  VXR_RETURN_IF_ERROR(check_brick_settings(options.settings));
   ViewStats stats;
   stats.transform = initial;
   GrabInteraction grab;
+  FrameBudget budget;
+  budget.target_ms = options.frame_budget_ms;
+  budget.bias = options.frame.lod.lod_bias;
   for (;;) {
     std::unique_ptr<FrameTarget> target;
     VXR_ASSIGN_OR_RETURN(target, make_target());
-    auto outcome = run_once(*target, volume, options, grab, stats);
+    auto outcome = run_once(*target, source, options, grab, budget, stats);
     if (!outcome) {
       if (!target->wants_restart()) return outcome.status();
       log_warn("XR: " + outcome.status().message());

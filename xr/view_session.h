@@ -2,11 +2,17 @@
 // (hello_xr's shape):
 //
 //   for each (re)start: make the target -> Vulkan context (target's hooks)
-//     -> attach -> eye renderer (uploads the volume)
-//     frame loop: wait_frame -> interaction -> render each view into the
-//                 target's image -> end_frame
+//     -> attach -> chunk cache (loader threads) + eye renderer
+//     frame loop: wait_frame -> interaction -> ONE command buffer: brick
+//                 uploads that arrived, then every view (lens-warp tiles
+//                 included) recorded into the target's images -> one submit
+//                 -> end_frame
 //   a lost session/instance (wants_restart) tears everything down in order
 //   and starts again; any other error ends the run with its message.
+//
+// No frame reads anything back or waits for I/O: missing bricks are asked of
+// the ChunkCache's loader threads and their resident ancestors drawn until
+// they arrive. With a frame budget the LOD bias follows the frame time.
 //
 // The volume transform and frame count live outside the restart loop, so a
 // recovered session continues where the lost one stopped.
@@ -14,10 +20,12 @@
 
 #include <functional>
 #include <memory>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
+#include <vector>
 
-#include "render/raycaster.h"
-#include "volume/dense_volume.h"
+#include "render/lod/brick_renderer.h"
+#include "render/volume_session.h"
 #include "xr/frame_target.h"
 #include "xr/interaction.h"
 #include "xr/lens_warp.h"
@@ -27,12 +35,15 @@ namespace vxr::xr {
 
 struct ViewOptions {
   uint64_t frames = 0;  // rendered frames before an orderly exit; 0: until the target ends
-  RenderSettings settings;
+  RenderSettings settings = default_view_settings();
   LensWarp warp;
+  BrickFrameSettings frame;     // LOD settings and per-frame upload budget
+  double frame_budget_ms = 0.0;  // > 0: the LOD bias follows the frame time towards this
+  uint64_t cache_bytes = uint64_t(1) << 30;  // decoded chunks kept on the CPU
+  uint32_t loader_threads = 2;
   int max_restarts = 3;
-  // Called after each rendered frame with the images of its views (mirror
-  // window, tests); may be empty.
-  std::function<void(uint64_t frame, const std::vector<ImageRgba8>& views)> on_frame;
+  // Called after each rendered frame (its command buffer has completed).
+  std::function<void(uint64_t frame)> on_frame;
 };
 
 struct ViewStats {
@@ -40,19 +51,28 @@ struct ViewStats {
   std::string device_fingerprint;  // of the Vulkan device the frames were rendered on
   uint64_t frames_rendered = 0;
   uint64_t frames_submitted = 0;  // including frames the runtime said not to render
+  uint64_t frames_complete = 0;   // rendered with every view drawn into its image
+  uint64_t frames_full_detail = 0;  // ... and no wanted brick missing (nothing drawn from an ancestor)
   int restarts = 0;
-  double mean_frame_ms = 0.0;  // wall time per rendered frame (render + upload + submit)
+  double mean_frame_ms = 0.0;  // per rendered frame: record + submit + GPU, wall clock
   double max_frame_ms = 0.0;
+  std::vector<double> frame_ms;  // every rendered frame's time, in order
+  std::vector<double> lod_bias;  // the LOD bias each rendered frame used
   uint64_t rays = 0;
+  uint64_t pipelines_first_frame = 0;        // pipelines built up to the end of frame 1
+  uint64_t pipelines_after_first_frame = 0;  // built after it (poses must build none)
+  uint64_t readbacks = 0;                    // image readbacks during the frames (PNG output only)
+  uint64_t bricks_uploaded = 0;
   VolumeTransform transform;   // where the interaction left the volume
 };
 
+// p50/p99 frame ms, frames complete, pipelines after frame 1, readbacks per
+// frame: the figures `vxr view --json` writes.
+nlohmann::json view_stats_json(const ViewStats& stats, const ViewOptions& options);
+
 using TargetFactory = std::function<Result<std::unique_ptr<FrameTarget>>()>;
 
-// The RenderSettings `vxr view` uses for 8-bit data of unknown content.
-RenderSettings default_view_settings();
-
-Result<ViewStats> run_view(const TargetFactory& make_target, const DenseVolume& volume, const ViewOptions& options,
-                           const VolumeTransform& initial);
+Result<ViewStats> run_view(const TargetFactory& make_target, std::shared_ptr<const ChunkSource> source,
+                           const ViewOptions& options, const VolumeTransform& initial);
 
 }  // namespace vxr::xr

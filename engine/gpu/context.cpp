@@ -7,6 +7,7 @@
 #include <mutex>
 
 #include "core/log.h"
+#include "gpu/pipeline_cache.h"
 #include "gpu/vk_check.h"
 
 namespace vxr::gpu {
@@ -237,6 +238,18 @@ Status Context::init(const ContextOptions& options) {
   VkFence fence = VK_NULL_HANDLE;
   VXR_VK_TRY(vkCreateFence(device_, &fci, nullptr, &fence));
   fence_ = Handle<VkFence>(device_, fence);
+
+  pipeline_cache_path_ = pipeline_cache_path();
+  std::vector<uint8_t> seed;
+  if (!pipeline_cache_path_.empty()) {
+    auto data = read_pipeline_cache(pipeline_cache_path_, properties_);
+    if (data) seed = std::move(data).value();
+    else if (data.status().code() != ErrorCode::kNotFound) log_warn(data.status().message());
+  }
+  VkPipelineCacheCreateInfo pcci{VK_STRUCTURE_TYPE_PIPELINE_CACHE_CREATE_INFO};
+  pcci.initialDataSize = seed.size();
+  pcci.pInitialData = seed.empty() ? nullptr : seed.data();
+  VXR_VK_TRY(vkCreatePipelineCache(device_, &pcci, nullptr, &pipeline_cache_));
   return Status::ok();
 }
 
@@ -317,6 +330,18 @@ Status Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& reco
 
 Context::~Context() {
   if (device_) vkDeviceWaitIdle(device_);
+  if (pipeline_cache_) {
+    size_t n = 0;
+    std::vector<uint8_t> data;
+    if (!pipeline_cache_path_.empty() && vkGetPipelineCacheData(device_, pipeline_cache_, &n, nullptr) == VK_SUCCESS) {
+      data.resize(n);
+      if (vkGetPipelineCacheData(device_, pipeline_cache_, &n, data.data()) == VK_SUCCESS) {
+        data.resize(n);
+        if (Status st = write_pipeline_cache(pipeline_cache_path_, properties_, data); !st) log_warn(st.message());
+      }
+    }
+    vkDestroyPipelineCache(device_, pipeline_cache_, nullptr);
+  }
   fence_.reset();
   command_pool_.reset();
   if (device_) vkDestroyDevice(device_, nullptr);

@@ -9,6 +9,7 @@
 
 #include <vulkan/vulkan.h>
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -85,6 +86,14 @@ class Context {
   // and waits for it to finish.
   Status submit_and_wait(const std::function<void(VkCommandBuffer)>& record);
 
+  // Every pipeline is created through this cache, loaded from disk at
+  // create() and written back when the context dies (gpu/pipeline_cache.h).
+  VkPipelineCache pipeline_cache() const { return pipeline_cache_; }
+  // Pipelines created on this context so far (the pipeline helpers count);
+  // a frame loop checks that poses never add one.
+  uint64_t pipelines_built() const { return pipelines_built_.load(); }
+  void count_pipeline_built() const { ++pipelines_built_; }
+
  private:
   Context() = default;
   Status init(const ContextOptions& options);
@@ -104,6 +113,9 @@ class Context {
   DeviceInfo info_;
   Handle<VkCommandPool> command_pool_;
   Handle<VkFence> fence_;
+  VkPipelineCache pipeline_cache_ = VK_NULL_HANDLE;
+  std::string pipeline_cache_path_;
+  mutable std::atomic<uint64_t> pipelines_built_{0};
 };
 
 }  // namespace vxr::gpu

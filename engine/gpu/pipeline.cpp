@@ -67,7 +67,8 @@ Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const Comput
   ci.stage.pSpecializationInfo = spec.info();
   ci.layout = p.layout;
   VkPipeline pipeline = VK_NULL_HANDLE;
-  VXR_VK_TRY(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
+  VXR_VK_TRY(vkCreateComputePipelines(dev, ctx.pipeline_cache(), 1, &ci, nullptr, &pipeline));
+  ctx.count_pipeline_built();
   p.pipeline = Handle<VkPipeline>(dev, pipeline);
   return p;
 }
@@ -131,7 +132,8 @@ Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const Ful
   ci.pDynamicState = &ds;
   ci.layout = p.layout;
   VkPipeline pipeline = VK_NULL_HANDLE;
-  VXR_VK_TRY(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &ci, nullptr, &pipeline));
+  VXR_VK_TRY(vkCreateGraphicsPipelines(dev, ctx.pipeline_cache(), 1, &ci, nullptr, &pipeline));
+  ctx.count_pipeline_built();
   p.pipeline = Handle<VkPipeline>(dev, pipeline);
   return p;
 }
@@ -176,8 +178,8 @@ static void write_image(const Context& ctx, VkDescriptorSet set, uint32_t bindin
 }
 
 static void write_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkDescriptorType type,
-                         VkBuffer buffer, VkDeviceSize size) {
-  VkDescriptorBufferInfo bi{buffer, 0, size};
+                         VkBuffer buffer, VkDeviceSize size, VkDeviceSize offset) {
+  VkDescriptorBufferInfo bi{buffer, offset, size};
   VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
   w.dstSet = set;
   w.dstBinding = binding;
@@ -195,12 +197,12 @@ void write_storage_image(const Context& ctx, VkDescriptorSet set, uint32_t bindi
   write_image(ctx, set, binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, view, VK_NULL_HANDLE, VK_IMAGE_LAYOUT_GENERAL);
 }
 void write_storage_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBuffer buffer,
-                          VkDeviceSize size) {
-  write_buffer(ctx, set, binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, buffer, size);
+                          VkDeviceSize size, VkDeviceSize offset) {
+  write_buffer(ctx, set, binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, buffer, size, offset);
 }
 void write_uniform_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBuffer buffer,
-                          VkDeviceSize size) {
-  write_buffer(ctx, set, binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, buffer, size);
+                          VkDeviceSize size, VkDeviceSize offset) {
+  write_buffer(ctx, set, binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, buffer, size, offset);
 }
 
 }  // namespace vxr::gpu

@@ -58,8 +58,8 @@ void write_combined_image(const Context& ctx, VkDescriptorSet set, uint32_t bind
                           VkSampler sampler, VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
 void write_storage_image(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkImageView view);
 void write_storage_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBuffer buffer,
-                          VkDeviceSize size = VK_WHOLE_SIZE);
+                          VkDeviceSize size = VK_WHOLE_SIZE, VkDeviceSize offset = 0);
 void write_uniform_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBuffer buffer,
-                          VkDeviceSize size = VK_WHOLE_SIZE);
+                          VkDeviceSize size = VK_WHOLE_SIZE, VkDeviceSize offset = 0);
 
 }  // namespace vxr::gpu

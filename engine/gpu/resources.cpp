@@ -1,5 +1,6 @@
 #include "gpu/resources.h"
 
+#include <atomic>
 #include <cstring>
 
 #include "core/trace.h"
@@ -170,8 +171,15 @@ Status upload_image(Context& ctx, Image& image, const void* texels, size_t bytes
   });
 }
 
+namespace {
+std::atomic<uint64_t> g_readbacks{0};
+}  // namespace
+
+uint64_t readback_count() { return g_readbacks.load(); }
+
 Status readback_image(Context& ctx, Image& image, void* out, size_t bytes, VkImageLayout final_layout) {
   VXR_TRACE_SCOPE("gpu.readback_image");
+  ++g_readbacks;
   const bool depth = image.format == VK_FORMAT_D32_SFLOAT;
   const uint64_t expected = uint64_t(image.extent.width) * image.extent.height * image.extent.depth *
                             format_texel_bytes(image.format);

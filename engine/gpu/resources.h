@@ -73,9 +73,13 @@ void transition_image(VkCommandBuffer cmd, Image& image, VkImageLayout new_layou
 Status upload_image(Context& ctx, Image& image, const void* texels, size_t bytes);
 
 // Copies the whole image (2D) back into `out` (tightly packed), waits, and
-// leaves the image in `final_layout`.
+// leaves the image in `final_layout`. Counted in readback_count().
 Status readback_image(Context& ctx, Image& image, void* out, size_t bytes,
                       VkImageLayout final_layout = VK_IMAGE_LAYOUT_GENERAL);
+
+// Image readbacks (readback_image) in this process so far: frame loops report
+// how many a frame took (none on the XR and desktop paths).
+uint64_t readback_count();
 
 Result<Handle<VkSampler>> create_linear_clamp_sampler(const Context& ctx);
 Result<Handle<VkSampler>> create_nearest_clamp_sampler(const Context& ctx);

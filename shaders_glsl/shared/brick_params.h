@@ -17,6 +17,9 @@ using uvec4 = glm::uvec4;
 #define VXR_BRICK_STORE_FINAL 4u  // write the finished premultiplied RGBA8 pixel
 #define VXR_BRICK_WORK_ITEMS 8u   // workgroup i marches work item pass.x + i: (brick, tile x, tile y)
 #define VXR_BRICK_TILE_LISTS 16u  // workgroup (x, y) marches its tile's list: items[y * tiles_x + x] = (first, count)
+#define VXR_BRICK_OPAQUE 32u      // final pixel over black: alpha 1 (display targets)
+#define VXR_BRICK_QUANTIZE 64u    // final pixel rounded to 8 bits, v * 255 + 0.5 (UNORM targets: the one rounding rule)
+#define VXR_BRICK_FINAL_FLOAT 128u  // final pixel into the accumulation image (float), for a blit into the target
 
 // One brick to march, everything in its own local voxels (level-l voxels,
 // origin at the brick's interior corner): the CPU computes these in double,
@@ -35,7 +38,7 @@ struct BrickRecord {
 // optical model) is the dense ray caster's RaycastParams (uniform buffer,
 // binding 7), filled by the same plan_raycast/pack_params.
 struct BrickCastParams {
-  uvec4 control;   // z: first brick, w: brick count (single pass); x, y unused
+  uvec4 control;   // xy: output pixel of the ray at (0, 0) (a rectangle of the target); z: first brick, w: brick count (single pass)
   uvec4 pass;      // x: work-item base with VXR_BRICK_WORK_ITEMS, z: flags
   vec4 atlas_inv;  // xyz: 1 / atlas size in texels
 };

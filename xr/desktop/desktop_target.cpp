@@ -126,7 +126,7 @@ Status DesktopTarget::attach(gpu::Context& ctx) {
     VXR_ASSIGN_OR_RETURN(gpu::Image img,
                          gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R8G8B8A8_UNORM, {o_.width, o_.height, 1},
                                                  VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
-                                                     VK_IMAGE_USAGE_SAMPLED_BIT,
+                                                     VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT,
                                                  "desktop eye"}));
     VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
       image_barrier(cmd, img.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
@@ -146,13 +146,17 @@ Status DesktopTarget::create_swapchain() {
   VXR_VK_TRY(vkGetPhysicalDeviceSurfaceFormatsKHR(ctx_->physical_device(), surface_, &n, formats.data()));
   swap_format_ = VK_FORMAT_UNDEFINED;
   VkColorSpaceKHR space = VK_COLOR_SPACE_SRGB_NONLINEAR_KHR;
-  for (VkFormat want : {VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_R8G8B8A8_UNORM})
+  const std::vector<VkFormat> wanted =
+      o_.srgb_swapchain ? std::vector<VkFormat>{VK_FORMAT_B8G8R8A8_SRGB, VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_UNORM,
+                                                VK_FORMAT_R8G8B8A8_UNORM}
+                        : std::vector<VkFormat>{VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_R8G8B8A8_UNORM};
+  for (VkFormat want : wanted)
     for (const auto& f : formats)
       if (swap_format_ == VK_FORMAT_UNDEFINED && f.format == want) {
         swap_format_ = f.format;
         space = f.colorSpace;
       }
-  if (swap_format_ == VK_FORMAT_UNDEFINED) return unsupported("the window offers no 8-bit UNORM swapchain format");
+  if (swap_format_ == VK_FORMAT_UNDEFINED) return unsupported("the window offers no 8-bit RGBA/BGRA swapchain format");
   if (!(caps.supportedUsageFlags & VK_IMAGE_USAGE_TRANSFER_DST_BIT))
     return unsupported("the window's swapchain images cannot be copied into (no TRANSFER_DST)");
   swap_extent_ = caps.currentExtent.width != UINT32_MAX
@@ -245,7 +249,8 @@ Result<TargetImage> DesktopTarget::acquire(size_t view) {
   if (view >= eyes_.size()) return out_of_range("the desktop window has " + std::to_string(eyes_.size()) + " views");
   const gpu::Image& e = eyes_[view];
   // Eye images rest in TRANSFER_SRC_OPTIMAL: end_frame blits from them.
-  return TargetImage{e.image, e.format, {e.extent.width, e.extent.height}, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL};
+  return TargetImage{e.image, e.format, {e.extent.width, e.extent.height}, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                     e.view};
 }
 
 Status DesktopTarget::end_frame(const FrameState& frame, const FrameContent& content) {

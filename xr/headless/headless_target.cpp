@@ -21,7 +21,8 @@ Status HeadlessTarget::attach(gpu::Context& ctx) {
     VXR_ASSIGN_OR_RETURN(gpu::Image img,
                          gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R8G8B8A8_UNORM,
                                                  {o_.script.width, o_.script.height, 1},
-                                                 VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                                                 VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                                                     VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT,
                                                  "headless view"}));
     // Start in GENERAL so every frame hands out the same layout.
     VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
@@ -67,7 +68,8 @@ Result<FrameState> HeadlessTarget::wait_frame() {
 Result<TargetImage> HeadlessTarget::acquire(size_t view) {
   if (view >= images_.size()) return out_of_range("headless target has " + std::to_string(images_.size()) + " views");
   const gpu::Image& img = images_[view];
-  return TargetImage{img.image, img.format, {img.extent.width, img.extent.height}, VK_IMAGE_LAYOUT_GENERAL};
+  return TargetImage{img.image, img.format, {img.extent.width, img.extent.height}, VK_IMAGE_LAYOUT_GENERAL,
+                     img.view};
 }
 
 Status HeadlessTarget::write_pngs(const std::string& tag) {

@@ -205,9 +205,11 @@ Status OpenXrTarget::create_swapchains() {
   VXR_XR_CALL(errors_, xrEnumerateSwapchainFormats, (session_, 0, &n, nullptr));
   std::vector<int64_t> formats(n);
   VXR_XR_CALL(errors_, xrEnumerateSwapchainFormats, (session_, n, &n, formats.data()));
-  // Our pixels are display-ready 8-bit values: UNORM first.
-  const VkFormat color = pick<VkFormat>(formats, {VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_B8G8R8A8_UNORM,
-                                                  VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_SRGB},
+  // sRGB first: compositors treat swapchain values as linear light, and an
+  // sRGB image stores the renderer's linear values encoded (the renderer
+  // blits unrounded floats into it); UNORM is the fallback (rounded bytes).
+  const VkFormat color = pick<VkFormat>(formats, {VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_SRGB,
+                                                  VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_B8G8R8A8_UNORM},
                                         VK_FORMAT_UNDEFINED);
   if (color == VK_FORMAT_UNDEFINED)
     return unsupported("OpenXR: the runtime offers no 8-bit RGBA/BGRA swapchain format");

@@ -146,10 +146,41 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
 }
 
 Status BrickPool::fill_slot(const ChunkKey& key, uint8_t* out) const {
+  VXR_ASSIGN_OR_RETURN(bool filled, fill_slot_from(key, out, [this](const ChunkKey& k) { return src_.read(k); }));
+  return filled ? Status::ok() : internal_error("brick pool: the source returned no chunk");
+}
+
+void BrickPool::slot_chunks(ChunkKey brick, std::vector<ChunkKey>& out) const {
+  const LevelInfo& li = src_.levels()[brick.level];
+  const bool neighbours = apron_ > src_.apron();
+  for (uint32_t c : channel_map_) {
+    brick.channel = c;
+    if (!neighbours) {
+      out.push_back(brick);
+      continue;
+    }
+    // fill_slot_from reads exactly the neighbours that exist (see there).
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int64_t x = int64_t(brick.x) + dx, y = int64_t(brick.y) + dy, z = int64_t(brick.z) + dz;
+          if (x < 0 || y < 0 || z < 0 || x >= li.chunk_counts[0] || y >= li.chunk_counts[1] ||
+              z >= li.chunk_counts[2])
+            continue;
+          ChunkKey k = brick;
+          k.x = uint32_t(x), k.y = uint32_t(y), k.z = uint32_t(z);
+          out.push_back(k);
+        }
+  }
+}
+
+Result<bool> BrickPool::fill_slot_from(const ChunkKey& key, uint8_t* out, const ReadChunk& fetch) const {
   const DType dtype = src_.info().dtype;
   const uint32_t a = src_.apron(), cs = src_.chunk_size();
+  // nullptr: not loaded yet (streaming); the slot is left unfinished.
   auto read = [&](const ChunkKey& k) -> Result<std::shared_ptr<const Chunk>> {
-    VXR_ASSIGN_OR_RETURN(auto chunk, src_.read(k));
+    VXR_ASSIGN_OR_RETURN(auto chunk, fetch(k));
+    if (!chunk) return chunk;
     const uint32_t e = cs + 2 * a;
     if (chunk->edge != e || chunk->dtype != dtype || chunk->data.size() != uint64_t(e) * e * e * dtype_bytes(dtype))
       return internal_error("brick pool: chunk level " + std::to_string(k.level) + " has edge " +
@@ -159,8 +190,9 @@ Status BrickPool::fill_slot(const ChunkKey& key, uint8_t* out) const {
   };
   if (apron_ == a) {  // the payload is the slot
     VXR_ASSIGN_OR_RETURN(auto chunk, read(key));
+    if (!chunk) return false;
     convert_to_texels(dtype, chunk->data.data(), size_t(edge_) * edge_ * edge_, out);
-    return Status::ok();
+    return true;
   }
   // Wider than the source's apron: slot voxel i of an axis is the level's
   // voxel clamp(c * cs - apron_ + i, 0, dims - 1), which lies in this chunk's
@@ -200,6 +232,7 @@ Status BrickPool::fill_slot(const ChunkKey& key, uint8_t* out) const {
           k.y = uint32_t(int64_t(key.y) + nb[1][y]);
           k.z = uint32_t(int64_t(key.z) + nb[2][z]);
           VXR_ASSIGN_OR_RETURN(auto chunk, read(k));
+          if (!chunk) return false;
           texels[slot].resize(payload * texel_bytes_);
           convert_to_texels(dtype, chunk->data.data(), payload, texels[slot].data());
         }
@@ -207,7 +240,7 @@ Status BrickPool::fill_slot(const ChunkKey& key, uint8_t* out) const {
         std::memcpy(out + ((size_t(z) * edge_ + y) * edge_ + x) * texel_bytes_,
                     texels[slot].data() + from * texel_bytes_, texel_bytes_);
       }
-  return Status::ok();
+  return true;
 }
 
 glm::uvec3 BrickPool::slot_origin(uint32_t slot) const {
@@ -243,10 +276,10 @@ Result<uint32_t> BrickPool::free_slot(UploadStats& stats) {
   return best;
 }
 
-Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uint64_t budget_bytes) {
-  VXR_TRACE_SCOPE("brick_pool.upload");
+Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint64_t budget_bytes,
+                                     const ReadChunk& fetch, std::vector<std::vector<VkBufferImageCopy>>& regions) {
+  regions.assign(atlases_.size(), {});  // per atlas
   UploadStats st;
-  std::vector<std::vector<VkBufferImageCopy>> regions(atlases_.size());  // per atlas
   uint64_t ring = 0;
   for (ChunkKey key : requests) {
     key.channel = 0;
@@ -256,10 +289,16 @@ Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uin
       ++st.deferred;
       continue;
     }
-    for (uint32_t c = 0; c < channels(); ++c) {
+    bool complete = true;
+    for (uint32_t c = 0; c < channels() && complete; ++c) {
       ChunkKey ck = key;
       ck.channel = channel_map_[c];
-      VXR_RETURN_IF_ERROR(fill_slot(ck, static_cast<uint8_t*>(staging_.mapped) + ring + c * channel_bytes_));
+      VXR_ASSIGN_OR_RETURN(complete,
+                           fill_slot_from(ck, static_cast<uint8_t*>(staging_.mapped) + ring + c * channel_bytes_, fetch));
+    }
+    if (!complete) {  // streaming: a chunk it needs is not decoded yet
+      ++st.deferred;
+      continue;
     }
     auto slot = free_slot(st);
     if (!slot) {
@@ -281,20 +320,43 @@ Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uin
     ++st.bricks;
     st.bytes += brick_bytes_;
   }
-  if (regions[0].empty()) return st;
-  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-    for (uint32_t c = 0; c < channels(); ++c) {
-      gpu::Image& atlas = atlases_[c];
-      gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                            VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
-                            VK_ACCESS_2_TRANSFER_WRITE_BIT);
-      vkCmdCopyBufferToImage(cmd, staging_.buffer, atlas.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                             static_cast<uint32_t>(regions[c].size()), regions[c].data());
-      gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
-                            VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                            VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-    }
-  }));
+  return st;
+}
+
+void BrickPool::record_copies(VkCommandBuffer cmd, const std::vector<std::vector<VkBufferImageCopy>>& regions) {
+  for (uint32_t c = 0; c < channels(); ++c) {
+    gpu::Image& atlas = atlases_[c];
+    gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+                          VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    vkCmdCopyBufferToImage(cmd, staging_.buffer, atlas.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                           static_cast<uint32_t>(regions[c].size()), regions[c].data());
+    gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                          VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  }
+}
+
+Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uint64_t budget_bytes) {
+  VXR_TRACE_SCOPE("brick_pool.upload");
+  std::vector<std::vector<VkBufferImageCopy>> regions;
+  VXR_ASSIGN_OR_RETURN(UploadStats st,
+                       stage(requests, budget_bytes, [this](const ChunkKey& k) { return src_.read(k); }, regions));
+  if (st.bricks == 0) return st;
+  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_copies(cmd, regions); }));
+  return st;
+}
+
+Result<UploadStats> BrickPool::record_upload(VkCommandBuffer cmd, const std::vector<ChunkKey>& requests,
+                                             uint64_t budget_bytes, const Fetch& fetch) {
+  VXR_TRACE_SCOPE("brick_pool.record_upload");
+  std::vector<std::vector<VkBufferImageCopy>> regions;
+  VXR_ASSIGN_OR_RETURN(UploadStats st, stage(requests, budget_bytes,
+                                             [&](const ChunkKey& k) -> Result<std::shared_ptr<const Chunk>> {
+                                               return fetch(k);
+                                             },
+                                             regions));
+  if (st.bricks > 0) record_copies(cmd, regions);
   return st;
 }
 
@@ -312,10 +374,17 @@ Status BrickPool::pin_top_level(uint32_t timepoint) {
     return out_of_range("brick pool: the top level has " + std::to_string(keys.size()) +
                         " chunks, too many to pin in " + std::to_string(capacity()) + " slots");
   for (Slot& s : slot_) s.pinned = false;  // another timepoint's pins become ordinary bricks
+  return pin(keys);
+}
+
+Status BrickPool::pin(const std::vector<ChunkKey>& keys) {
+  if (keys.size() > capacity() / 2)
+    return out_of_range("brick pool: " + std::to_string(keys.size()) + " chunks are too many to pin in " +
+                        std::to_string(capacity()) + " slots");
   while (true) {
     VXR_ASSIGN_OR_RETURN(UploadStats st, upload(keys, UINT64_MAX));
     if (st.deferred == 0) break;
-    if (st.bricks == 0) return out_of_range("brick pool: no room to pin the top level");
+    if (st.bricks == 0) return out_of_range("brick pool: no room to pin " + std::to_string(keys.size()) + " chunks");
   }
   for (const ChunkKey& k : keys) slot_[map_.at(k)].pinned = true;
   return Status::ok();

@@ -24,10 +24,15 @@
 // recently used brick not drawn this frame. The source's top level (of the
 // timepoint drawn) is pinned so the traversal always has a resident ancestor.
 //
+// Streaming (vxr view): record_upload() takes chunks from a cache instead of
+// the source and records the copies into the frame's command buffer; a brick
+// is staged only when every chunk its slot is made of (slot_chunks) is there.
+//
 // Between uploads the atlases are in SHADER_READ_ONLY_OPTIMAL; an upload
 // moves them to TRANSFER_DST_OPTIMAL and back around its copies.
 #pragma once
 
+#include <functional>
 #include <glm/glm.hpp>
 #include <list>
 #include <memory>
@@ -97,11 +102,26 @@ class BrickPool {
   glm::uvec3 touch(ChunkKey key);
 
   // Loads and uploads the top level of `timepoint` and pins it; pins of other
-  // timepoints are released (they become ordinary LRU bricks).
+  // timepoints (and pin() calls) are released (they become ordinary LRU bricks).
   Status pin_top_level(uint32_t timepoint = 0);
+  // Loads, uploads and pins `keys` (at most half the slots) in addition to
+  // what is pinned, outside a frame's recording (it waits for its copies).
+  Status pin(const std::vector<ChunkKey>& keys);
   // Uploads requested bricks in order until `budget_bytes` (at least one brick
   // per call) or the ring is used up. Waits for the copies.
   Result<UploadStats> upload(const std::vector<ChunkKey>& requests, uint64_t budget_bytes);
+
+  // Streaming form of upload(): chunks come from `fetch` (nullptr: not loaded
+  // yet; the brick is skipped and counted as deferred) and the copies are
+  // recorded into `cmd`, ahead of the frame's rays. The staging ring is
+  // reused: the command buffer of the previous call must have completed.
+  using Fetch = std::function<std::shared_ptr<const Chunk>(const ChunkKey&)>;
+  Result<UploadStats> record_upload(VkCommandBuffer cmd, const std::vector<ChunkKey>& requests, uint64_t budget_bytes,
+                                    const Fetch& fetch);
+  // The chunks (source keys: every drawn channel and, when the slot's apron is
+  // wider than the source's, the neighbours it is filled from) that the slot
+  // of `brick` is made of: what a streaming caller must have loaded.
+  void slot_chunks(ChunkKey brick, std::vector<ChunkKey>& out) const;
 
   // One atlas per drawn channel (channels() of them); source_channel(i) is what atlas i holds.
   // One channel of `key` (key.channel is the source's) as slot texels: edge^3
@@ -130,6 +150,15 @@ class BrickPool {
   };
   BrickPool(gpu::Context& ctx, const ChunkSource& src) : ctx_(ctx), src_(src) {}
   Result<uint32_t> free_slot(UploadStats& stats);
+  // A chunk by key; a null chunk: not loaded yet.
+  using ReadChunk = std::function<Result<std::shared_ptr<const Chunk>>(const ChunkKey&)>;
+  // fill_slot with chunks from `fetch`; false when one of them is not loaded yet.
+  Result<bool> fill_slot_from(const ChunkKey& key, uint8_t* out, const ReadChunk& fetch) const;
+  // Fills requested bricks (every channel) into the staging ring and assigns
+  // their slots; the regions (per atlas) still have to be copied (record_copies).
+  Result<UploadStats> stage(const std::vector<ChunkKey>& requests, uint64_t budget_bytes, const ReadChunk& fetch,
+                            std::vector<std::vector<VkBufferImageCopy>>& regions);
+  void record_copies(VkCommandBuffer cmd, const std::vector<std::vector<VkBufferImageCopy>>& regions);
   glm::uvec3 slot_origin(uint32_t slot) const;
 
   gpu::Context& ctx_;

@@ -47,7 +47,51 @@ void compute_barrier(VkCommandBuffer cmd) {
   vkCmdPipelineBarrier2(cmd, &dep);
 }
 
+// One barrier that orders everything before it against compute work after it:
+// views of a frame share the accumulation image and the atlas.
+void full_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access) {
+  VkMemoryBarrier2 mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+  mb.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+  mb.srcAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT;
+  mb.dstStageMask = dst_stage;
+  mb.dstAccessMask = dst_access;
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.memoryBarrierCount = 1;
+  dep.pMemoryBarriers = &mb;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+void layout_barrier(VkCommandBuffer cmd, VkImage image, VkImageLayout from, VkImageLayout to,
+                    VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access, VkPipelineStageFlags2 dst_stage,
+                    VkAccessFlags2 dst_access) {
+  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
+  b.srcStageMask = src_stage;
+  b.srcAccessMask = src_access;
+  b.dstStageMask = dst_stage;
+  b.dstAccessMask = dst_access;
+  b.oldLayout = from;
+  b.newLayout = to;
+  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image;
+  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.imageMemoryBarrierCount = 1;
+  dep.pImageMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+VkDeviceSize align_up(VkDeviceSize v, VkDeviceSize a) { return a > 1 ? (v + a - 1) / a * a : v; }
+
 }  // namespace
+
+bool is_unorm8(VkFormat f) {
+  switch (f) {
+    case VK_FORMAT_R8G8B8A8_UNORM:
+    case VK_FORMAT_B8G8R8A8_UNORM:
+    case VK_FORMAT_A8B8G8R8_UNORM_PACK32: return true;
+    default: return false;
+  }
+}
 
 std::string format_stats(const BrickFrameStats& s) {
   char buf[320];
@@ -131,14 +175,21 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->pipeline_,
                        gpu::create_compute_pipeline(ctx, {"brick_raycast.comp", b, sizeof(shader::BrickCastParams),
                                                           {{100, VXR_MODEL_EMISSION_ABSORPTION}, {104, 0}, {105, 0}}}));
-  VXR_ASSIGN_OR_RETURN(r->desc_pool_, gpu::create_descriptor_pool(ctx, b, 2));
-  VXR_ASSIGN_OR_RETURN(r->paged_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_.set_layout));
+  if (options.max_views == 0) return invalid_argument("brick renderer: max_views must be at least 1");
+  VXR_ASSIGN_OR_RETURN(r->desc_pool_, gpu::create_descriptor_pool(ctx, b, options.max_views + 1));
   VXR_ASSIGN_OR_RETURN(r->mono_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_.set_layout));
+  for (uint32_t i = 0; i < options.max_views; ++i) {
+    VXR_ASSIGN_OR_RETURN(VkDescriptorSet set, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_.set_layout));
+    r->view_sets_.push_back(set);
+  }
   VXR_ASSIGN_OR_RETURN(r->linear_, gpu::create_linear_clamp_sampler(ctx));
   VXR_ASSIGN_OR_RETURN(r->transfer_tex_,
                        gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT, {VXR_TF_SIZE, VXR_MAX_CHANNELS, 1},
                                                VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                                                "transfer function"}));
+  VXR_ASSIGN_OR_RETURN(r->tf_staging_, gpu::create_buffer(ctx, {uint64_t(VXR_TF_SIZE) * VXR_MAX_CHANNELS * sizeof(glm::vec4),
+                                                                VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                                                gpu::MemoryIntent::kUpload, "transfer function staging"}));
   VXR_ASSIGN_OR_RETURN(r->table_, gpu::create_buffer(ctx, {uint64_t(options.max_bricks) * sizeof(shader::BrickRecord),
                                                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                            gpu::MemoryIntent::kUpload, "brick table"}));
@@ -147,19 +198,39 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->items_, gpu::create_buffer(ctx, {uint64_t(options.max_work_items) * sizeof(glm::uvec4),
                                                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                            gpu::MemoryIntent::kUpload, "brick work items"}));
-  VXR_ASSIGN_OR_RETURN(r->params_, gpu::create_buffer(ctx, {sizeof(shader::RaycastParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+  r->params_stride_ = align_up(sizeof(shader::RaycastParams), ctx.limits().minUniformBufferOffsetAlignment);
+  VXR_ASSIGN_OR_RETURN(r->params_, gpu::create_buffer(ctx, {r->params_stride_ * options.max_views,
+                                                            VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                                                             gpu::MemoryIntent::kUpload, "brick raycast params"}));
-  r->bind_atlases(r->paged_set_, r->pool_atlases());
-  for (VkDescriptorSet set : {r->paged_set_, r->mono_set_}) {
-    gpu::write_storage_buffer(ctx, set, 4, r->table_.buffer);
+  std::vector<VkDescriptorSet> all = r->view_sets_;
+  all.push_back(r->mono_set_);
+  for (VkDescriptorSet set : all) {
+    if (set != r->mono_set_) r->bind_atlases(set, r->pool_atlases());
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
-    gpu::write_storage_buffer(ctx, set, 6, r->items_.buffer);
-    gpu::write_uniform_buffer(ctx, set, 7, r->params_.buffer);
     // The core reads the table with texelFetch: the sampler's filter is unused.
     gpu::write_combined_image(ctx, set, 1, r->transfer_tex_.view, r->linear_);
   }
-  VXR_RETURN_IF_ERROR(r->pool_->pin_top_level());
+  gpu::write_storage_buffer(ctx, r->mono_set_, 4, r->table_.buffer);
+  gpu::write_storage_buffer(ctx, r->mono_set_, 6, r->items_.buffer);
+  gpu::write_uniform_buffer(ctx, r->mono_set_, 7, r->params_.buffer, sizeof(shader::RaycastParams));
+  VXR_RETURN_IF_ERROR(r->ensure_target(1, 1));  // the storage binding needs an image even when views blit
+  VXR_RETURN_IF_ERROR(r->pin_resident(0));
   return r;
+}
+
+Status BrickRenderer::pin_resident(uint32_t timepoint) {
+  VXR_RETURN_IF_ERROR(pool_->pin_top_level(timepoint));
+  if (!opt_.preload_if_fits) return Status::ok();
+  std::vector<ChunkKey> keys;
+  for (uint32_t l = 0; l < src_.levels().size(); ++l) {
+    const LevelInfo& li = src_.levels()[l];
+    for (uint32_t z = 0; z < li.chunk_counts[2]; ++z)
+      for (uint32_t y = 0; y < li.chunk_counts[1]; ++y)
+        for (uint32_t x = 0; x < li.chunk_counts[0] && keys.size() <= pool_->capacity() / 2; ++x)
+          keys.push_back({l, x, y, z, 0, timepoint});
+  }
+  if (keys.size() <= pool_->capacity() / 2) VXR_RETURN_IF_ERROR(pool_->pin(keys));
+  return Status::ok();
 }
 
 VolumePlacement BrickRenderer::placement() const {
@@ -174,29 +245,51 @@ LodView BrickRenderer::view_for(const Camera& camera, uint32_t width, uint32_t h
 
 Status BrickRenderer::ensure_target(uint32_t width, uint32_t height) {
   if (target_.image && target_.extent.width == width && target_.extent.height == height) return Status::ok();
+  if (target_.image) retired_.push_back(std::move(target_));
   VXR_ASSIGN_OR_RETURN(target_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, VK_FORMAT_R8G8B8A8_UNORM,
                                                          {width, height, 1},
                                                          VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                                                          "brick raycast target"}));
-  VXR_ASSIGN_OR_RETURN(accum_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT,
-                                                        {width, height, 1}, VK_IMAGE_USAGE_STORAGE_BIT,
+  return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+    gpu::transition_image(cmd, target_, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  });
+}
+
+Status BrickRenderer::ensure_accum(uint32_t width, uint32_t height) {
+  if (accum_.image && accum_.extent.width >= width && accum_.extent.height >= height) return Status::ok();
+  const uint32_t w = std::max(width, accum_.extent.width), h = std::max(height, accum_.extent.height);
+  if (accum_.image) retired_.push_back(std::move(accum_));
+  VXR_ASSIGN_OR_RETURN(accum_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT, {w, h, 1},
+                                                        VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                                                         "brick raycast accumulation"}));
-  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+  // Created at the first frame (or a larger view); the frames after reuse it.
+  return ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
     gpu::transition_image(cmd, accum_, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
                           VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                           VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  }));
-  for (VkDescriptorSet set : {paged_set_, mono_set_}) {
-    gpu::write_storage_image(ctx_, set, 2, target_.view);
-    gpu::write_storage_image(ctx_, set, 3, accum_.view);
-  }
-  return Status::ok();
+  });
 }
 
-Status BrickRenderer::upload_transfer(const TransferTable& table) {
+Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& table) {
   if (table.rgba == tf_uploaded_) return Status::ok();
-  VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, transfer_tex_, table.rgba.data(), table.rgba.size() * sizeof(glm::vec4)));
+  if (tf_recorded_)
+    return invalid_argument("record_view: the views of one frame must share one transfer function "
+                            "(same colormap, window and opacity settings)");
+  const size_t bytes = table.rgba.size() * sizeof(glm::vec4);
+  if (bytes != tf_staging_.size) return internal_error("transfer table has an unexpected size");
+  std::memcpy(tf_staging_.mapped, table.rgba.data(), bytes);
+  gpu::transition_image(cmd, transfer_tex_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                        VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  VkBufferImageCopy region{};
+  region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  region.imageExtent = transfer_tex_.extent;
+  vkCmdCopyBufferToImage(cmd, tf_staging_.buffer, transfer_tex_.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+  gpu::transition_image(cmd, transfer_tex_, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                        VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                        VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   tf_uploaded_ = table.rgba;
+  tf_recorded_ = true;
   return Status::ok();
 }
 
@@ -243,12 +336,26 @@ void BrickRenderer::bind_atlases(VkDescriptorSet set, const std::vector<const gp
   vkUpdateDescriptorSets(ctx_.device(), 1, &w, 0, nullptr);
 }
 
-Status BrickRenderer::ensure_apron(const RenderSettings& s) {
-  const bool gradients = s.gradient_opacity.enabled || s.model == OpticalModel::kIsosurface;
-  if (!gradients || pool_->apron() >= 2) return Status::ok();
-  // Once per renderer: the bricks are loaded again with the wider apron.
+namespace {
+// Gradient opacity and the isosurface normal read +-1 voxel around a sample.
+bool needs_gradients(const RenderSettings& s) {
+  return s.gradient_opacity.enabled || s.model == OpticalModel::kIsosurface;
+}
+}  // namespace
+
+Status BrickRenderer::prepare(const RenderSettings& s) {
+  if (!needs_gradients(s) || pool_->apron() >= 2) return Status::ok();
+  return rebuild_pool(2);
+}
+
+Status BrickRenderer::rebuild_pool(uint32_t apron) {
+  // Once per renderer: the bricks are loaded again with the wider apron. The
+  // old atlases may still be read by a submitted frame, and every view's set
+  // names them: wait for the device, then replace and rebind. Callers run
+  // this before any of this frame's commands are recorded (prepare,
+  // begin_frame), so no recording command buffer has bound a set yet.
   BrickPoolOptions po = opt_.pool;
-  po.apron = 2;
+  po.apron = apron;
   po.channels.clear();
   for (uint32_t c = 0; c < pool_->channels(); ++c) po.channels.push_back(pool_->source_channel(c));
   if (VkResult vr = vkDeviceWaitIdle(ctx_.device()); vr != VK_SUCCESS)
@@ -256,8 +363,9 @@ Status BrickRenderer::ensure_apron(const RenderSettings& s) {
   pool_.reset();
   VXR_ASSIGN_OR_RETURN(pool_, BrickPool::create(ctx_, src_, po));
   opt_.pool = po;
-  bind_atlases(paged_set_, pool_atlases());
-  return pool_->pin_top_level(pinned_timepoint_);
+  for (VkDescriptorSet set : view_sets_) bind_atlases(set, pool_atlases());
+  // Requested bricks are keyed the same; the new pool has none of them yet.
+  return pin_resident(pinned_timepoint_);
 }
 
 Status BrickRenderer::ensure_timepoint(uint32_t timepoint) {
@@ -266,7 +374,7 @@ Status BrickRenderer::ensure_timepoint(uint32_t timepoint) {
                             std::to_string(src_.info().timepoints) + " (0.." +
                             std::to_string(src_.info().timepoints - 1) + ")");
   if (timepoint == pinned_timepoint_) return Status::ok();
-  VXR_RETURN_IF_ERROR(pool_->pin_top_level(timepoint));
+  VXR_RETURN_IF_ERROR(pin_resident(timepoint));
   pinned_timepoint_ = timepoint;
   return Status::ok();
 }
@@ -297,59 +405,97 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
   std::memcpy(out, &r, sizeof(r));
 }
 
-Result<double> BrickRenderer::cast(VkDescriptorSet set, const RenderSettings& s, const shader::RaycastParams& params,
-                                   uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
-                                   const std::vector<glm::uvec2>& waves, BrickFrameStats* stats) {
-  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, params.control.x));
-  std::memcpy(params_.mapped, &params, sizeof(params));
+Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
+                                  uint32_t w, uint32_t h, uint32_t bricks, const glm::uvec3& atlas_texels,
+                                  BrickPassMode mode, const std::vector<glm::uvec2>& waves, const RenderTarget& target,
+                                  uint32_t* dispatches_out) {
+  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model));
+  // RGBA8 UNORM with a storage view: the rays write it. Anything else (BGRA,
+  // sRGB, float, no storage usage): final float pixels go to the
+  // accumulation image and one blit converts them into the target's format.
+  const bool direct = target.storage_view != VK_NULL_HANDLE && target.format == VK_FORMAT_R8G8B8A8_UNORM;
+  if (!direct) {
+    VkFormatProperties fp;
+    vkGetPhysicalDeviceFormatProperties(ctx_.physical_device(), target.format, &fp);
+    if (!(fp.optimalTilingFeatures & VK_FORMAT_FEATURE_BLIT_DST_BIT))
+      return unsupported("render target: format " + std::to_string(target.format) +
+                         " is neither RGBA8 UNORM with a storage view nor a blit destination on this device");
+  }
+  const VkImageLayout final_layout =
+      target.layout == VK_IMAGE_LAYOUT_UNDEFINED ? VK_IMAGE_LAYOUT_GENERAL : target.layout;
+  const VkOffset2D at = target.rect.offset;
+  const uint32_t out_flags = VXR_BRICK_STORE_FINAL | (target.opaque ? VXR_BRICK_OPAQUE : 0u) |
+                             (is_unorm8(target.format) ? VXR_BRICK_QUANTIZE : 0u) |
+                             (direct ? 0u : VXR_BRICK_FINAL_FLOAT);
   shader::BrickCastParams p{};
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z, 0.0f);
-  const uint32_t w = params.control.y, h = params.control.z;
-  std::memset(counters_.mapped, 0, 16);
   uint32_t dispatches = 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-    gpu::transition_image(cmd, target_, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
-                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->pipeline);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set, 0, nullptr);
-    auto dispatch = [&](uint32_t first, uint32_t count, uint32_t flags) {
-      p.control = glm::uvec4(0, 0, first, count);
-      p.pass = glm::uvec4(0, 0, flags, 0);
-      vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
-      vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
-      ++dispatches;
-    };
-    if (mode == BrickPassMode::kSinglePass) {
-      dispatch(0, bricks, VXR_BRICK_STORE_FINAL);
-    } else if (mode == BrickPassMode::kTiled) {
-      dispatch(0, 0, VXR_BRICK_TILE_LISTS | VXR_BRICK_STORE_FINAL);
-    } else {
-      dispatch(0, 0, VXR_BRICK_STORE_ACCUM);  // clear
-      const uint32_t max_groups = ctx_.limits().maxComputeWorkGroupCount[0];
-      for (const glm::uvec2& wave : waves) {
-        compute_barrier(cmd);  // a wave continues rays the previous one wrote
-        for (uint32_t done = 0; done < wave.y; done += max_groups) {
-          p.control = glm::uvec4(0, 0, 0, 0);
-          p.pass = glm::uvec4(wave.x + done, 0, VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM, 0);
-          vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
-          vkCmdDispatch(cmd, std::min(max_groups, wave.y - done), 1, 1);
-          ++dispatches;
-        }
+
+  // The previous view's dispatches and blit used the same accumulation image.
+  full_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+               VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
+                   VK_ACCESS_2_SHADER_SAMPLED_READ_BIT | VK_ACCESS_2_UNIFORM_READ_BIT);
+  if (direct)
+    layout_barrier(cmd, target.image, target.layout, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                   VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->pipeline);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set, 0, nullptr);
+  auto dispatch = [&](uint32_t first, uint32_t count, uint32_t flags) {
+    p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), first, count);
+    p.pass = glm::uvec4(0, 0, flags, 0);
+    vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+    vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
+    ++dispatches;
+  };
+  if (mode == BrickPassMode::kSinglePass) {
+    dispatch(0, bricks, out_flags);
+  } else if (mode == BrickPassMode::kTiled) {
+    dispatch(0, 0, VXR_BRICK_TILE_LISTS | out_flags);
+  } else {
+    dispatch(0, 0, VXR_BRICK_STORE_ACCUM);  // clear
+    const uint32_t max_groups = ctx_.limits().maxComputeWorkGroupCount[0];
+    for (const glm::uvec2& wave : waves) {
+      compute_barrier(cmd);  // a wave continues rays the previous one wrote
+      for (uint32_t done = 0; done < wave.y; done += max_groups) {
+        p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), 0, 0);
+        p.pass = glm::uvec4(wave.x + done, 0, VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM, 0);
+        vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+        vkCmdDispatch(cmd, std::min(max_groups, wave.y - done), 1, 1);
+        ++dispatches;
       }
-      compute_barrier(cmd);
-      dispatch(0, 0, VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_FINAL);
     }
-  }));
-  const double ms = ms_since(t0);
-  if (stats) {
-    uint32_t c[2];
-    std::memcpy(c, counters_.mapped, 8);
-    stats->samples = uint64_t(c[0]) | (uint64_t(c[1]) << 32);
-    stats->dispatches = dispatches;
-    stats->render_ms = ms;
+    compute_barrier(cmd);
+    dispatch(0, 0, VXR_BRICK_LOAD_ACCUM | out_flags);
   }
-  return ms;
+  if (direct) {
+    layout_barrier(cmd, target.image, VK_IMAGE_LAYOUT_GENERAL, final_layout, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                   VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+  } else {
+    // The final pixels, written by the last dispatch, are the blit's source.
+    layout_barrier(cmd, accum_.image, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    layout_barrier(cmd, target.image, target.layout, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    VkImageBlit blit{};
+    blit.srcSubresource = blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    blit.srcOffsets[1] = {int32_t(w), int32_t(h), 1};
+    blit.dstOffsets[0] = {at.x, at.y, 0};
+    blit.dstOffsets[1] = {at.x + int32_t(w), at.y + int32_t(h), 1};
+    vkCmdBlitImage(cmd, accum_.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target.image,
+                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, VK_FILTER_NEAREST);
+    layout_barrier(cmd, accum_.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL,
+                   VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    layout_barrier(cmd, target.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, final_layout, VK_PIPELINE_STAGE_2_BLIT_BIT,
+                   VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                   VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+  }
+  if (dispatches_out) *dispatches_out += dispatches;
+  return Status::ok();
 }
 
 namespace {
@@ -374,7 +520,8 @@ glm::uvec4 screen_rect(const BrickBox& b, const LodView& v) {
 }
 }  // namespace
 
-Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<ChunkKey>& draw, const LodView& view) {
+Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<ChunkKey>& draw, const LodView& view,
+                                                           glm::uvec4* dst, size_t capacity, size_t* used) {
   // Each brick becomes one work item per 8x8 tile holding a pixel whose ray
   // hits it. A brick goes into the wave after the last wave that wrote any of
   // its pixels, so within a wave no two items write the same pixel (the shader
@@ -436,12 +583,13 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
     for (uint32_t pi : hit_pixels) tile_hit[size_t((pi / w) / 8) * tw + (pi % w) / 8] = 0;
     waves = std::max(waves, wave + 1);
   }
-  if (items.size() > opt_.max_work_items)
-    return out_of_range("render: the view needs " + std::to_string(items.size()) + " brick tiles, the work list holds " +
-                        std::to_string(opt_.max_work_items) + "; raise the LOD bias or use a smaller image");
+  if (items.size() > capacity)
+    return out_of_range("render: the view needs " + std::to_string(items.size()) + " brick tiles, the frame's work "
+                        "list has room for " + std::to_string(capacity) + " (of " + std::to_string(opt_.max_work_items) +
+                        "); raise the LOD bias or use a smaller image");
   std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.wave < b.wave; });
   std::vector<glm::uvec2> out(waves, glm::uvec2(0));
-  auto* dst = static_cast<glm::uvec4*>(items_.mapped);
+  *used = items.size();
   for (uint32_t i = 0; i < items.size(); ++i) {
     dst[i] = glm::uvec4(items[i].brick, items[i].tx, items[i].ty, 0);
     if (out[items[i].wave].y == 0) out[items[i].wave].x = i;
@@ -450,7 +598,8 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
   return out;
 }
 
-Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view) {
+Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, glm::uvec4* dst,
+                                       size_t capacity, size_t* used) {
   const uint32_t tw = (view.width + 7) / 8, th = (view.height + 7) / 8;
   std::vector<std::vector<uint32_t>> lists(size_t(tw) * th);
   size_t total = lists.size();
@@ -461,10 +610,11 @@ Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const 
       for (uint32_t x = r.x / 8; x <= (r.x + r.z - 1) / 8; ++x) lists[size_t(y) * tw + x].push_back(b);
   }
   for (const auto& l : lists) total += l.size();
-  if (total > opt_.max_work_items)
-    return out_of_range("render: the view needs " + std::to_string(total) + " tile entries, the work list holds " +
-                        std::to_string(opt_.max_work_items) + "; raise the LOD bias or use a smaller image");
-  auto* dst = static_cast<glm::uvec4*>(items_.mapped);
+  if (total > capacity)
+    return out_of_range("render: the view needs " + std::to_string(total) + " tile entries, the frame's work list "
+                        "has room for " + std::to_string(capacity) + " (of " + std::to_string(opt_.max_work_items) +
+                        "); raise the LOD bias or use a smaller image");
+  *used = total;
   uint32_t next = static_cast<uint32_t>(lists.size());
   for (size_t t = 0; t < lists.size(); ++t) {
     dst[t] = glm::uvec4(next, uint32_t(lists[t].size()), 0, 0);
@@ -473,20 +623,65 @@ Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const 
   return Status::ok();
 }
 
-Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSettings& s,
-                                         const BrickFrameSettings& frame, uint32_t width, uint32_t height,
-                                         BrickFrameStats* stats_out) {
-  VXR_TRACE_SCOPE("brick_renderer.render");
+Status BrickRenderer::begin_frame(VkCommandBuffer cmd, const BrickFrameSettings& frame) {
+  VXR_TRACE_SCOPE("brick_renderer.begin_frame");
+  // Pool changes first, before this frame records anything: a rebuild waits
+  // for the device and rebinds the sets; a new timepoint's pins are uploaded
+  // through the staging ring this frame's copies then reuse.
+  if (apron_wanted_ > pool_->apron()) {
+    VXR_RETURN_IF_ERROR(rebuild_pool(apron_wanted_));
+    pending_.clear();
+  }
+  apron_wanted_ = 0;
+  VXR_RETURN_IF_ERROR(ensure_timepoint(frame.lod.timepoint));
+  retired_.clear();  // the caller waited for the frame that used them
+  views_ = 0;
+  table_used_ = items_used_ = 0;
+  tf_recorded_ = false;
+  requests_.clear();
+  std::memset(counters_.mapped, 0, 16);
+  ++frame_number_;
+  pool_->begin_frame();
+  last_upload_ = {};
+  if (ChunkCache* cache = opt_.stream_from) {
+    for (auto& [key, st] : cache->take_errors())
+      if (!st) return st;  // the source names the file and the chunk
+    if (!pending_.empty()) {
+      VXR_ASSIGN_OR_RETURN(last_upload_, pool_->record_upload(cmd, pending_, frame.upload_budget_bytes,
+                                                              [cache](const ChunkKey& k) { return cache->get(k); }));
+    }
+    // This frame's views request what they still miss; the queue holds only that.
+    pending_.clear();
+    cache->cancel_all();
+  }
+  return Status::ok();
+}
+
+Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, const RenderSettings& s,
+                                  const BrickFrameSettings& frame, const RenderTarget& target,
+                                  BrickFrameStats* stats_out) {
+  VXR_TRACE_SCOPE("brick_renderer.record_view");
+  const VkRect2D rect = target.rect.extent.width ? target.rect : VkRect2D{{0, 0}, target.extent};
+  const uint32_t width = rect.extent.width, height = rect.extent.height;
   if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
+  if (rect.offset.x < 0 || rect.offset.y < 0 || rect.offset.x + width > target.extent.width ||
+      rect.offset.y + height > target.extent.height)
+    return invalid_argument("render: the view's rectangle lies outside its target image");
   if (!(s.step_voxels > 0.0)) return invalid_argument("render: step must be > 0 voxels");
   VXR_RETURN_IF_ERROR(check_brick_settings(s, channels()));
-  VXR_RETURN_IF_ERROR(ensure_timepoint(frame.lod.timepoint));
-  VXR_RETURN_IF_ERROR(ensure_apron(s));
-  VXR_RETURN_IF_ERROR(ensure_target(width, height));
+  if (frame.lod.timepoint != pinned_timepoint_)
+    return invalid_argument("record_view: timepoint " + std::to_string(frame.lod.timepoint) +
+                            " differs from the frame's (begin_frame pinned " + std::to_string(pinned_timepoint_) + ")");
+  if (views_ >= opt_.max_views)
+    return out_of_range("render: more than " + std::to_string(opt_.max_views) +
+                        " views in one frame; raise BrickRendererOptions::max_views");
+  // Gradients want an apron of 2; the pool is rebuilt at the next begin_frame
+  // (prepare() does it before the first frame), this view reads what it has.
+  if (needs_gradients(s) && pool_->apron() < 2) apron_wanted_ = 2;
   const TransferTable tf = build_transfer_table(s);
-  VXR_RETURN_IF_ERROR(upload_transfer(tf));
+  VXR_RETURN_IF_ERROR(record_transfer(cmd, tf));
+  VXR_RETURN_IF_ERROR(ensure_accum(width, height));
   BrickFrameStats st;
-  pool_->begin_frame();
   const LodView view = view_for(camera, width, height);
 
   auto t0 = std::chrono::steady_clock::now();
@@ -506,37 +701,103 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
   LodResult lod = traverse_lod(src_, view, frame.lod, q);
   st.traverse_ms = ms_since(t0);
   st.lod = lod.stats;
-  if (lod.draw.size() > opt_.max_bricks)
-    return out_of_range("render: the view needs " + std::to_string(lod.draw.size()) + " bricks, the brick table holds " +
-                        std::to_string(opt_.max_bricks) + "; raise the LOD bias or max_bricks");
 
+  // This view's slices of the frame's table and work list (offsets aligned for descriptors).
+  const VkDeviceSize salign = std::max<VkDeviceSize>(ctx_.limits().minStorageBufferOffsetAlignment, 16);
+  const VkDeviceSize table_base = align_up(table_used_, salign);
+  const VkDeviceSize table_bytes = std::max<size_t>(lod.draw.size(), 1) * sizeof(shader::BrickRecord);
+  if (table_base + table_bytes > table_.size)
+    return out_of_range("render: the view needs " + std::to_string(lod.draw.size()) + " bricks, the frame's brick "
+                        "table has room for " + std::to_string((table_.size - std::min(table_.size, table_base)) /
+                                                               sizeof(shader::BrickRecord)) +
+                        " (of " + std::to_string(opt_.max_bricks) + "); raise the LOD bias or max_bricks");
   for (size_t i = 0; i < lod.draw.size(); ++i) {
     const glm::uvec3 o = pool_->touch(lod.draw[i]);
-    fill_record(static_cast<uint8_t*>(table_.mapped) + i * sizeof(shader::BrickRecord), lod.draw[i], glm::vec3(o),
-                view, frame.lod);
+    fill_record(static_cast<uint8_t*>(table_.mapped) + table_base + i * sizeof(shader::BrickRecord), lod.draw[i],
+                glm::vec3(o), view, frame.lod);
   }
   BrickPassMode mode = frame.mode != BrickPassMode::kAuto ? frame.mode
                        : ctx_.info().is_cpu()             ? BrickPassMode::kMultipass
                                                           : BrickPassMode::kTiled;
   // Waves carry a ray's state in one RGBA32F texel; larger states march tiled.
   if (mode == BrickPassMode::kMultipass && !brick_state_fits_texel(s, channels())) mode = BrickPassMode::kTiled;
+  const VkDeviceSize items_base = align_up(items_used_, salign);
+  const size_t items_capacity = items_base < items_.size ? (items_.size - items_base) / sizeof(glm::uvec4) : 0;
+  auto* items_dst = reinterpret_cast<glm::uvec4*>(static_cast<uint8_t*>(items_.mapped) + items_base);
+  size_t items_n = 0;
   std::vector<glm::uvec2> waves;
   if (mode == BrickPassMode::kMultipass) {
-    VXR_ASSIGN_OR_RETURN(waves, build_waves(lod.draw, view));
+    VXR_ASSIGN_OR_RETURN(waves, build_waves(lod.draw, view, items_dst, items_capacity, &items_n));
   } else if (mode == BrickPassMode::kTiled) {
-    VXR_RETURN_IF_ERROR(build_tile_lists(lod.draw, view));
+    VXR_RETURN_IF_ERROR(build_tile_lists(lod.draw, view, items_dst, items_capacity, &items_n));
   }
+  const VkDeviceSize items_bytes = std::max<size_t>(items_n, 1) * sizeof(glm::uvec4);
+  if (items_base + items_bytes > items_.size) return out_of_range("render: the frame's work list is full");
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;
   st.hit_rate = wanted ? double(lod.stats.drawn - lod.stats.fallback) / double(wanted) : 1.0;
 
   const shader::RaycastParams params =
       pack_params(plan_raycast(camera, s, placement(), value_scales_, width, height), false);
-  VXR_RETURN_IF_ERROR(cast(paged_set_, s, params, static_cast<uint32_t>(lod.draw.size()), pool_->atlas_texels(),
-                           mode, waves, &st)
-                          .status());
+  const VkDeviceSize params_offset = VkDeviceSize(views_) * params_stride_;
+  std::memcpy(static_cast<uint8_t*>(params_.mapped) + params_offset, &params, sizeof(params));
+
+  VkDescriptorSet set = view_sets_[views_];
+  const bool direct = target.storage_view != VK_NULL_HANDLE && target.format == VK_FORMAT_R8G8B8A8_UNORM;
+  gpu::write_storage_image(ctx_, set, 2, direct ? target.storage_view : target_.view.get());
+  gpu::write_storage_image(ctx_, set, 3, accum_.view);
+  gpu::write_storage_buffer(ctx_, set, 4, table_.buffer, table_bytes, table_base);
+  gpu::write_storage_buffer(ctx_, set, 6, items_.buffer, items_bytes, items_base);
+  gpu::write_uniform_buffer(ctx_, set, 7, params_.buffer, sizeof(shader::RaycastParams), params_offset);
+  VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),
+                                  pool_->atlas_texels(), mode, waves, target, &st.dispatches));
+  ++views_;
+  table_used_ = table_base + table_bytes;
+  items_used_ = items_base + items_bytes;
+
+  // Missing bricks: streaming asks the loader threads (nearest first, this
+  // frame before older ones); otherwise render() reads them after the frame.
+  if (ChunkCache* cache = opt_.stream_from) {
+    std::vector<ChunkKey> chunks;
+    for (size_t i = 0; i < lod.requests.size(); ++i) {
+      chunks.clear();
+      pool_->slot_chunks(lod.requests[i], chunks);  // every channel, and neighbours for a wider apron
+      for (const ChunkKey& k : chunks) cache->request(k, double(frame_number_) * 1e7 - double(i));
+      pending_.push_back(lod.requests[i]);
+    }
+    st.bricks_uploaded = last_upload_.bricks;
+    st.bytes_uploaded = last_upload_.bytes;
+    st.evicted = last_upload_.evicted;
+  } else {
+    requests_.insert(requests_.end(), lod.requests.begin(), lod.requests.end());
+  }
+  if (stats_out) *stats_out = st;
+  return Status::ok();
+}
+
+Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSettings& s,
+                                         const BrickFrameSettings& frame, uint32_t width, uint32_t height,
+                                         BrickFrameStats* stats_out) {
+  VXR_TRACE_SCOPE("brick_renderer.render");
+  if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
+  VXR_RETURN_IF_ERROR(check_brick_settings(s, channels()));
+  VXR_RETURN_IF_ERROR(prepare(s));
+  VXR_RETURN_IF_ERROR(ensure_target(width, height));
+  BrickFrameStats st;
+  Status recorded = Status::ok();
+  const RenderTarget target{target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL};
+  const auto t0 = std::chrono::steady_clock::now();
+  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+    recorded = begin_frame(cmd, frame);
+    if (recorded) recorded = record_view(cmd, camera, s, frame, target, &st);
+  }));
+  VXR_RETURN_IF_ERROR(recorded);
+  st.render_ms = ms_since(t0) - st.traverse_ms;
+  uint32_t c[2];
+  std::memcpy(c, counters_.mapped, 8);
+  st.samples = uint64_t(c[0]) | (uint64_t(c[1]) << 32);
   // Uploads after the frame's rays: what arrives is drawn from the next frame on.
-  if (!lod.requests.empty()) {
-    VXR_ASSIGN_OR_RETURN(UploadStats up, pool_->upload(lod.requests, frame.upload_budget_bytes));
+  if (!requests_.empty()) {
+    VXR_ASSIGN_OR_RETURN(UploadStats up, pool_->upload(requests_, frame.upload_budget_bytes));
     st.bytes_uploaded = up.bytes;
     st.bricks_uploaded = up.bricks;
     st.evicted = up.evicted;
@@ -601,9 +862,10 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
                                                     BrickFrameStats* stats_out) {
   VXR_TRACE_SCOPE("brick_renderer.render_monolithic");
   if (mono_level_ == UINT32_MAX) return invalid_argument("render_monolithic: call set_monolithic first");
+  if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
   VXR_RETURN_IF_ERROR(check_brick_settings(s, channels()));
   VXR_RETURN_IF_ERROR(ensure_target(width, height));
-  VXR_RETURN_IF_ERROR(upload_transfer(build_transfer_table(s)));
+  VXR_RETURN_IF_ERROR(ensure_accum(width, height));
   const LodView view = view_for(camera, width, height);
   // One "brick": the whole level, local origin at voxel 0, no apron (the
   // sampler's clamp-to-edge repeats the border voxels like an apron would).
@@ -627,14 +889,31 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
     const double len = glm::length(n);
     if (len > 0) r.plane = v4(n / len, clip.cut.offset / len);
   }
-  std::memcpy(table_.mapped, &r, sizeof(r));
   BrickFrameStats st;
   st.lod.drawn = 1;
   const shader::RaycastParams params =
       pack_params(plan_raycast(camera, s, placement(), value_scales_, width, height), false);
-  VXR_RETURN_IF_ERROR(cast(mono_set_, s, params, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
-                           BrickPassMode::kSinglePass, {}, &st)
-                          .status());
+  const RenderTarget target{target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL};
+  Status recorded = Status::ok();
+  const auto t0 = std::chrono::steady_clock::now();
+  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+    BrickFrameSettings frame;  // the pool's timepoint stays as it is (the texture has its own)
+    frame.lod.timepoint = pinned_timepoint_;
+    recorded = begin_frame(cmd, frame);
+    if (recorded) recorded = record_transfer(cmd, build_transfer_table(s));
+    if (!recorded) return;
+    std::memcpy(table_.mapped, &r, sizeof(r));
+    std::memcpy(params_.mapped, &params, sizeof(params));
+    gpu::write_storage_image(ctx_, mono_set_, 2, target_.view);
+    gpu::write_storage_image(ctx_, mono_set_, 3, accum_.view);
+    recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
+                           BrickPassMode::kSinglePass, {}, target, &st.dispatches);
+  }));
+  VXR_RETURN_IF_ERROR(recorded);
+  st.render_ms = ms_since(t0);
+  uint32_t c[2];
+  std::memcpy(c, counters_.mapped, 8);
+  st.samples = uint64_t(c[0]) | (uint64_t(c[1]) << 32);
   ImageRgba8 img(width, height);
   VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, target_, img.pixels.data(), img.pixels.size()));
   if (stats_out) *stats_out = st;

@@ -28,8 +28,9 @@
 // Classification and compositing are the dense ray caster's GLSL core
 // (shaders_glsl/include/raycast_core.glsl) with the same RaycastParams and
 // transfer table; see check_brick_settings for what the brick path draws.
-// The timepoint is the frame's (BrickFrameSettings::lod.timepoint); channels
-// are the pool's (BrickPoolOptions::channels).
+// The timepoint is the frame's (BrickFrameSettings::lod.timepoint, pinned by
+// begin_frame, so every view of a frame shares it); channels are the pool's
+// (BrickPoolOptions::channels).
 #pragma once
 
 #include <map>
@@ -48,34 +49,27 @@
 #include "render/lod/lod_traversal.h"
 #include "render/raycaster.h"
 #include "render/transfer_function.h"
+#include "render/volume_renderer.h"
 #include "shared/raycast_params.h"
+#include "volume/chunk_cache.h"
 
 namespace vxr {
 
-enum class BrickPassMode { kAuto, kSinglePass, kTiled, kMultipass };
-
 struct BrickRendererOptions {
   BrickPoolOptions pool;
-  uint32_t max_bricks = 16384;         // brick-table capacity per frame
-  uint32_t max_work_items = 1u << 20;  // multipass (brick, tile) items per frame
-};
-
-struct BrickFrameSettings {
-  LodSettings lod;
-  uint64_t upload_budget_bytes = UINT64_MAX;  // per frame; at least one brick is uploaded
-  BrickPassMode mode = BrickPassMode::kAuto;
-};
-
-struct BrickFrameStats {
-  LodStats lod;
-  uint64_t samples = 0;          // texture samples the rays took
-  uint64_t bytes_uploaded = 0;
-  uint32_t bricks_uploaded = 0;
-  uint32_t evicted = 0;
-  double hit_rate = 1.0;         // wanted bricks already resident / wanted bricks
-  uint32_t dispatches = 0;
-  double traverse_ms = 0.0;      // CPU octree traversal
-  double render_ms = 0.0;        // ray-cast submission, wall clock
+  uint32_t max_bricks = 16384;         // brick-table capacity per frame (all views together)
+  uint32_t max_work_items = 1u << 20;  // multipass / tile-list entries per frame (all views together)
+  uint32_t max_views = 32;             // record_view calls per frame (eyes x lens-warp tiles)
+  // Streaming (vxr view): missing bricks are requested from this cache,
+  // whose loader threads read and decode them; begin_frame copies in those
+  // that have arrived. A frame never waits for I/O: until a brick arrives its
+  // resident ancestor is drawn. Null: render() reads missing bricks itself
+  // after the frame (vxr render, tests). Must outlive the renderer.
+  ChunkCache* stream_from = nullptr;
+  // Small volumes: when every chunk of every level (channel 0, timepoint 0)
+  // fits in half the pool, upload and pin them all at create(), so every
+  // frame draws at full detail from the first (and deterministically).
+  bool preload_if_fits = false;
 };
 
 // The brick shader classifies and composites with the dense ray caster's
@@ -116,13 +110,23 @@ bool brick_state_fits_texel(const RenderSettings& s, uint32_t channels);
 // "visited 123 drawn 45 (fallback 2) empty 30 culled 12 missing 3 samples 1.2M uploaded 0.4 MiB hit 97%"
 std::string format_stats(const BrickFrameStats& s);
 
-class BrickRenderer {
+class BrickRenderer final : public VolumeRenderer {
  public:
   static Result<std::unique_ptr<BrickRenderer>> create(gpu::Context& ctx, const ChunkSource& source,
                                                        const BrickRendererOptions& options = {});
 
-  // Premultiplied RGBA, top row first. Complete every frame: missing bricks
-  // are drawn from their nearest resident ancestor.
+  // VolumeRenderer. Per view: one slice of the frame's brick table, work
+  // list and parameter ring, and one descriptor set (max_views per frame).
+  Status begin_frame(VkCommandBuffer cmd, const BrickFrameSettings& frame) override;
+  Status record_view(VkCommandBuffer cmd, const Camera& camera, const RenderSettings& settings,
+                     const BrickFrameSettings& frame, const RenderTarget& target,
+                     BrickFrameStats* stats = nullptr) override;
+  VolumePlacement placement() const override;
+
+  // One frame of one view recorded, submitted, waited for and read back
+  // (tests, PNG output): premultiplied RGBA, top row first. Complete every
+  // frame: missing bricks are drawn from their nearest resident ancestor;
+  // without a stream cache they are read after the frame, within the budget.
   Result<ImageRgba8> render(const Camera& camera, const RenderSettings& settings, const BrickFrameSettings& frame,
                             uint32_t width, uint32_t height, BrickFrameStats* stats = nullptr);
 
@@ -134,32 +138,51 @@ class BrickRenderer {
 
   BrickPool& pool() { return *pool_; }
   uint32_t channels() const { return pool_->channels(); }
-  VolumePlacement placement() const;
+  // Bricks requested from the stream cache and not yet copied in.
+  size_t pending_bricks() const { return pending_.size(); }
+
+  // Makes the pool fit `settings` before frames draw with them: gradients
+  // (gradient opacity, iso normals) need an apron of 2 in the atlas, so the
+  // first settings that need it rebuild the pool with one (vkDeviceWaitIdle,
+  // bricks loaded again). Call it outside any command buffer's recording of
+  // this renderer's work: before begin_frame, or never (record_view then asks
+  // for the rebuild and the next begin_frame does it; until then gradients
+  // read the narrower apron). render() calls it.
+  Status prepare(const RenderSettings& settings);
 
  private:
   BrickRenderer(gpu::Context& ctx, const ChunkSource& src) : ctx_(ctx), src_(src) {}
   Status ensure_target(uint32_t width, uint32_t height);
-  // Gradients (gradient opacity, iso normals) need an apron of 2 in the
-  // atlas: the first frame that needs it rebuilds the pool with one.
-  Status ensure_apron(const RenderSettings& s);
-  // The frame's timepoint: its top level pinned.
+  // The accumulation image holds at least width x height (rays' state between
+  // passes, and final float pixels on their way to a blit).
+  Status ensure_accum(uint32_t width, uint32_t height);
+  // Records the transfer table's upload when it changed (once per frame at most).
+  Status record_transfer(VkCommandBuffer cmd, const TransferTable& table);
+  // Rebuilds the pool with `apron` (waits for the device; rebinds every set).
+  Status rebuild_pool(uint32_t apron);
+  // The frame's timepoint: its top level pinned (begin_frame, before any copy is recorded).
   Status ensure_timepoint(uint32_t timepoint);
+  // Pins the top level of `timepoint` and, with preload_if_fits, every chunk.
+  Status pin_resident(uint32_t timepoint);
   void bind_atlases(VkDescriptorSet set, const std::vector<const gpu::Image*>& atlases);
   std::vector<const gpu::Image*> pool_atlases() const;
-  Status upload_transfer(const TransferTable& table);
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels, features).
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in texels).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
                    const LodSettings& clip) const;
-  Result<double> cast(VkDescriptorSet set, const RenderSettings& s, const shader::RaycastParams& params,
-                      uint32_t bricks,
-                      const glm::uvec3& atlas_texels, BrickPassMode mode, const std::vector<glm::uvec2>& waves,
-                      BrickFrameStats* stats);
-  // Multipass work items (brick, 8x8 tile) grouped into waves; returns (first item, count) per wave.
-  Result<std::vector<glm::uvec2>> build_waves(const std::vector<ChunkKey>& draw, const LodView& view);
+  // Records one view's dispatches with `set` and writes the result into `target`.
+  // `model`: the packed parameters' VXR_MODEL_* (control.x).
+  Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
+                     uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
+                     const std::vector<glm::uvec2>& waves, const RenderTarget& target, uint32_t* dispatches);
+  // Multipass work items (brick, 8x8 tile) grouped into waves, written at
+  // `dst` (capacity entries); returns (first item, count) per wave.
+  Result<std::vector<glm::uvec2>> build_waves(const std::vector<ChunkKey>& draw, const LodView& view,
+                                              glm::uvec4* dst, size_t capacity, size_t* used);
   // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen rectangle touches it.
-  Status build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view);
+  Status build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, glm::uvec4* dst, size_t capacity,
+                          size_t* used);
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
   gpu::Context& ctx_;
@@ -169,14 +192,26 @@ class BrickRenderer {
   gpu::ComputePipeline pipeline_;  // emission-absorption, one channel; its set layout is the sets'
   std::map<uint32_t, gpu::ComputePipeline> pipelines_;  // other variants, keyed as in pipeline_for
   gpu::Handle<VkDescriptorPool> desc_pool_;
-  VkDescriptorSet paged_set_ = VK_NULL_HANDLE, mono_set_ = VK_NULL_HANDLE;
+  VkDescriptorSet mono_set_ = VK_NULL_HANDLE;
+  std::vector<VkDescriptorSet> view_sets_;  // one per view of a frame
   gpu::Handle<VkSampler> linear_;
   gpu::Image transfer_tex_, target_, accum_;
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
-  gpu::Buffer table_, counters_, items_, params_;
+  std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
+  gpu::Buffer table_, counters_, items_, params_, tf_staging_;
+  VkDeviceSize params_stride_ = 0;
+  // This frame: views recorded, and the table / work-list entries they took.
+  uint32_t views_ = 0;
+  size_t table_used_ = 0, items_used_ = 0;
+  bool tf_recorded_ = false;
   std::vector<glm::vec4> tf_uploaded_;
+  std::vector<ChunkKey> pending_;    // streaming: requested, not yet copied in
+  std::vector<ChunkKey> requests_;   // render(): the frame's requests, read after it
+  uint64_t frame_number_ = 0;
+  UploadStats last_upload_;          // streaming: what this frame's begin_frame copied in
   uint32_t mono_level_ = UINT32_MAX, mono_timepoint_ = 0;
   uint32_t pinned_timepoint_ = 0;
+  uint32_t apron_wanted_ = 0;        // a view needed a wider apron: the next begin_frame rebuilds the pool
   std::vector<glm::dvec3> ray_dirs_;  // per pixel 1/direction, for build_waves
   std::tuple<glm::dvec3, glm::dvec3, glm::dvec3> rays_for_;
   std::vector<uint32_t> pixel_wave_;
