@@ -295,7 +295,7 @@ TEST_CASE("dense chunk source: a pyramid down to one chunk, aprons repeat edge v
   CHECK((*s)->read({0, 3, 0, 0, 0, 0}).status().code() == ErrorCode::kNotFound);
 }
 
-TEST_CASE("pipeline cache: a file round-trips; a corrupt, truncated or foreign one is refused naming the file") {
+TEST_CASE("pipeline cache: a file round-trips, a corrupt, truncated or foreign one is refused naming the file") {
   const std::string path = (std::filesystem::temp_directory_path() / "vxr_pipeline_cache_test/p.bin").string();
   VkPhysicalDeviceProperties props{};
   props.vendorID = 0x1234;
