@@ -1,5 +1,7 @@
 #include "gpu/pipeline_cache.h"
 
+#include "core/output_file.h"
+
 #include <unistd.h>
 
 #include <cstdlib>
@@ -80,19 +82,11 @@ Status write_pipeline_cache(const std::string& path, const VkPhysicalDevicePrope
   std::memcpy(h.uuid, props.pipelineCacheUUID, VK_UUID_SIZE);
   h.payload_bytes = payload.size();
   h.payload_hash = fnv1a(payload.data(), payload.size());
-  const std::string tmp = path + ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) return io_error(tmp + ": cannot write the pipeline cache (check the folder's permissions)");
-    f.write(reinterpret_cast<const char*>(&h), sizeof(h));
-    f.write(reinterpret_cast<const char*>(payload.data()), std::streamsize(payload.size()));
-    if (!f) return io_error(tmp + ": writing the pipeline cache failed (disk full?)");
-  }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    return io_error(path + ": cannot replace the pipeline cache: " + ec.message());
-  }
+  // Header and payload in one buffer, written through a TempFile: never torn, never through a planted link.
+  std::vector<uint8_t> bytes(sizeof(h) + payload.size());
+  std::memcpy(bytes.data(), &h, sizeof(h));
+  if (!payload.empty()) std::memcpy(bytes.data() + sizeof(h), payload.data(), payload.size());
+  VXR_RETURN_IF_ERROR(write_file_atomically(path, bytes));
   return Status::ok();
 }
 
