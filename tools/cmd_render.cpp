@@ -78,22 +78,6 @@ bool parse_doubles(const std::string& text, size_t n, std::vector<double>& out) 
   return out.size() == n;
 }
 
-// Values at the 0.5 and 99.5 percentiles of the channel (sampled), in data units.
-std::pair<double, double> auto_window(const DenseVolume& v) {
-  std::vector<double> s;
-  const uint64_t n = v.voxel_count();
-  const uint64_t stride = std::max<uint64_t>(1, n / 200000);
-  for (uint64_t i = 0; i < n; i += stride) {
-    const uint64_t x = i % v.dims[0], y = (i / v.dims[0]) % v.dims[1], z = i / (uint64_t(v.dims[0]) * v.dims[1]);
-    s.push_back(v.value_at(static_cast<uint32_t>(x), static_cast<uint32_t>(y), static_cast<uint32_t>(z)));
-  }
-  std::sort(s.begin(), s.end());
-  double lo = s[static_cast<size_t>(0.005 * (s.size() - 1))], hi = s[static_cast<size_t>(0.995 * (s.size() - 1))];
-  if (!(hi > lo)) lo = s.front(), hi = s.back();
-  if (!(hi > lo)) hi = lo + 1.0;
-  return {lo, hi};
-}
-
 // --channel "2" or "0,2": the volume's channels to draw (at most 4, each once).
 Result<std::vector<uint32_t>> parse_channels(const std::string& text, uint32_t volume_channels) {
   std::vector<uint32_t> out;
@@ -195,7 +179,7 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
       window_error = dense.status();
       return std::pair<double, double>(0.0, 1.0);
     }
-    return auto_window(*dense);
+    return percentile_window(*dense);
   });
   if (!window_error) return fail(window_error);
   if (Status st = check_brick_settings(s, static_cast<uint32_t>(drawn->size())); !st) return fail(st, kExitUsage);
@@ -515,7 +499,7 @@ int run(const Options& given) {
     }
   }
   complete_channel_settings(s, channels.size(), window_given, !o.colormap.empty(),
-                            [&](size_t c) { return auto_window(channels[c]); });
+                            [&](size_t c) { return percentile_window(channels[c]); });
   if (Status st = validate_render_settings(s, static_cast<uint32_t>(channels.size())); !st) return fail(st, kExitUsage);
 
   const VolumePlacement placement{channels[0].dims, channels[0].voxel_size};

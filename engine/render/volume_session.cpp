@@ -14,21 +14,6 @@
 namespace vxr {
 namespace {
 
-// Values at the 0.5 and 99.5 percentiles of a volume (sampled), in data units.
-std::pair<double, double> percentile_window(const DenseVolume& v) {
-  std::vector<double> s;
-  const uint64_t n = v.voxel_count();
-  const uint64_t stride = std::max<uint64_t>(1, n / 200000);
-  for (uint64_t i = 0; i < n; i += stride) {
-    const uint64_t x = i % v.dims[0], y = (i / v.dims[0]) % v.dims[1], z = i / (uint64_t(v.dims[0]) * v.dims[1]);
-    s.push_back(v.value_at(uint32_t(x), uint32_t(y), uint32_t(z)));
-  }
-  std::sort(s.begin(), s.end());
-  double lo = s[size_t(0.005 * double(s.size() - 1))], hi = s[size_t(0.995 * double(s.size() - 1))];
-  if (!(hi > lo)) lo = s.front(), hi = s.back();
-  if (!(hi > lo)) hi = lo + 1.0;
-  return {lo, hi};
-}
 
 // The window of a chunked source from a level small enough to read whole.
 Result<std::pair<double, double>> source_window(const ChunkSource& src) {
@@ -63,6 +48,22 @@ std::string dims_text(const VolumeInfo& i) {
 }
 
 }  // namespace
+
+// Values at the 0.5 and 99.5 percentiles of a volume (sampled), in data units.
+std::pair<double, double> percentile_window(const DenseVolume& v) {
+  std::vector<double> s;
+  const uint64_t n = v.voxel_count();
+  const uint64_t stride = std::max<uint64_t>(1, n / 200000);
+  for (uint64_t i = 0; i < n; i += stride) {
+    const uint64_t x = i % v.dims[0], y = (i / v.dims[0]) % v.dims[1], z = i / (uint64_t(v.dims[0]) * v.dims[1]);
+    s.push_back(v.value_at(uint32_t(x), uint32_t(y), uint32_t(z)));
+  }
+  std::sort(s.begin(), s.end());
+  double lo = s[size_t(0.005 * double(s.size() - 1))], hi = s[size_t(0.995 * double(s.size() - 1))];
+  if (!(hi > lo)) lo = s.front(), hi = s.back();
+  if (!(hi > lo)) hi = lo + 1.0;
+  return {lo, hi};
+}
 
 RenderSettings default_view_settings() {
   RenderSettings s;

@@ -12,12 +12,14 @@
 #pragma once
 
 #include <memory>
+#include <utility>
 #include <string>
 #include <vector>
 
 #include "core/status.h"
 #include "scene/render_settings.h"
 #include "volume/chunk_source.h"
+#include "volume/dense_volume.h"
 #include "volume/procedural_source.h"
 
 namespace vxr {
@@ -45,5 +47,9 @@ Result<VolumeSession> open_volume_session(const std::string& input, const Sessio
 // `procedural:vessels:SIDE[:SEED]`: the synthetic vessel volume of `vxr bench
 // lod`, SIDE^3 voxels (up to 131072), generated on demand.
 Result<std::unique_ptr<ProceduralSource>> open_procedural(const std::string& spec);
+
+// Values at the 0.5 and 99.5 percentiles of a volume (sampled), in data units:
+// the default window of vxr view and vxr render.
+std::pair<double, double> percentile_window(const DenseVolume& v);
 
 }  // namespace vxr
