@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -134,6 +135,34 @@ TEST_CASE("output safety: a folder as output is refused and leaves no .partial b
   CHECK(r.rc == 2);
   CHECK(no_partial_left(dir));
   CHECK(fs::is_empty(dir / "outdir"));
+}
+
+TEST_CASE("output safety: an output inside an input folder (OME-Zarr store, slice series) is refused") {
+  const fs::path dir = scratch("inside_input_folder");
+  const fs::path zarr = copy_in("zarr/simple_0.4", dir);
+  const fs::path slices = copy_in("slices/mri-stack", dir);
+  auto listing = [](const fs::path& root) {
+    std::vector<std::string> names;
+    for (const auto& e : fs::recursive_directory_iterator(root)) names.push_back(e.path().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  const auto zarr_before = listing(zarr), slices_before = listing(slices);
+  // A new file where a chunk key could be, and a new file at the store's root.
+  const CliRun chunk = run_vxr("import " + q(zarr) + " -o " + q(zarr / "scale0/image/0/1"), dir);
+  CHECK(chunk.rc == 2);
+  CHECK(chunk.err.find("inside the input folder") != std::string::npos);
+  const CliRun render = run_vxr("render " + q(zarr) + " --size 16x16 -o " + q(zarr / "view.png"), dir);
+  CHECK(render.rc == 2);
+  CHECK(render.err.find("inside the input folder") != std::string::npos);
+  // Through a relative path with '..' that still lands inside the slice folder.
+  const CliRun rel = run_vxr("import " + q(slices) + " -o " + q(slices / ".." / "mri-stack" / "x.vxc"), dir);
+  CHECK(rel.rc == 2);
+  CHECK(rel.err.find("inside the input folder") != std::string::npos);
+  CHECK(listing(zarr) == zarr_before);
+  CHECK(listing(slices) == slices_before);
+  // Beside the folder is fine.
+  CHECK(run_vxr("render " + q(zarr) + " --size 16x16 -o " + q(dir / "view.png"), dir).rc == 0);
 }
 
 TEST_CASE("output safety: a FIFO as output is refused and stays a FIFO") {

@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "annotate/annotation_store.h"
+#include "core/output_file.h"
 #include "annotate/csv_export.h"
 #include "annotate/file_io.h"
 #include "annotate/swc.h"
@@ -54,20 +55,10 @@ Result<std::unique_ptr<AnnotationStore>> open_store(const std::string& path, boo
   return AnnotationStore::open(path, create);
 }
 
-// Outputs must never replace what we read: the store folder (or anything in
-// it) and any input file.
-Status check_output(const std::string& out, const std::string& store, const std::vector<std::string>& inputs = {}) {
-  std::error_code ec;
-  const fs::path o = fs::weakly_canonical(out, ec);
-  const fs::path st = fs::weakly_canonical(store, ec);
-  const std::string os = o.string(), ss = st.string();
-  if (os == ss || os.rfind(ss + "/", 0) == 0) {
-    return invalid_argument("-o " + out + ": that is the annotation store " + store + "; write somewhere else");
-  }
-  for (const std::string& in : inputs)
-    if (fs::weakly_canonical(in, ec) == o)
-      return invalid_argument("-o " + out + ": that is an input; write somewhere else");
-  return Status::ok();
+// Outputs must never replace what we read: the store folder (or anything in it).
+Status check_store_output(const std::string& out, const std::string& store) {
+  const std::string inputs[] = {store};
+  return vxr::check_output(out, inputs, "-o");
 }
 
 std::string fmt(double v) {
@@ -446,7 +437,7 @@ void add_annotate_command(CLI::App& app, Invocation& inv) {
     auto out = std::make_shared<std::string>();
     auto* cmd = store_command(*top, inv, "export-swc", "write a skeleton as SWC (micrometres), numbered parents first",
                               store, [store, skel, out](AnnotationStore& s) {
-                                if (Status st = check_output(*out, *store); !st.is_ok()) return fail(st, kExitUsage);
+                                if (Status st = check_store_output(*out, *store); !st.is_ok()) return fail(st, kExitUsage);
                                 auto sk = s.skeleton(*skel);
                                 if (!sk.is_ok()) return fail_status(sk.status());
                                 const VoxelSpace& vs = s.voxel_space();
@@ -477,7 +468,7 @@ void add_annotate_command(CLI::App& app, Invocation& inv) {
         store_command(*top, inv, "export-csv", "points, counts, measurements or tracks as CSV (stdout without -o)",
                       store, [store, what, out, t](AnnotationStore& s) {
                         if (!out->empty()) {
-                          if (Status st = check_output(*out, *store); !st.is_ok()) return fail(st, kExitUsage);
+                          if (Status st = check_store_output(*out, *store); !st.is_ok()) return fail(st, kExitUsage);
                         }
                         auto markers = s.markers();
                         if (!markers.is_ok()) return fail(markers.status());
@@ -618,7 +609,7 @@ void add_cards_command(CLI::App& app, Invocation& inv) {
     auto* cmd = store_command(
         *top, inv, "export", "write card-ID.json (+ .png, .wav) into a folder", store,
         [store, id, out](AnnotationStore& s) {
-          if (Status st = check_output(*out, *store); !st.is_ok()) return fail(st, kExitUsage);
+          if (Status st = check_store_output(*out, *store); !st.is_ok()) return fail(st, kExitUsage);
           auto c = s.card(*id);
           if (!c.is_ok()) return fail_status(c.status());
           std::error_code ec;

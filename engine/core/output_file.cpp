@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -64,6 +65,19 @@ Status check_output(const std::string& output, std::span<const std::string> inpu
   const fs::path folder = folder_of(output);
   if (!fs::is_directory(folder, ec))
     return not_found(role + " '" + output + "': folder '" + folder.string() + "' does not exist");
+  // An input folder (an OME-Zarr store, a slice series, an annotation store)
+  // is read as a whole: a new file inside it could become a chunk key, a
+  // slice or a database file.
+  const fs::path out_real = fs::weakly_canonical(fs::absolute(output, ec), ec);
+  for (const std::string& in : inputs) {
+    if (in.empty() || !fs::is_directory(in, ec)) continue;
+    const fs::path dir = fs::canonical(in, ec);
+    if (ec) continue;
+    auto [d, o] = std::mismatch(dir.begin(), dir.end(), out_real.begin(), out_real.end());
+    if (d == dir.end())
+      return invalid_argument(role + " '" + output + "' is inside the input folder '" + in +
+                              "'; writing there could change the input: choose a path outside it");
+  }
   return Status::ok();
 }
 
