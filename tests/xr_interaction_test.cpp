@@ -119,6 +119,74 @@ TEST_CASE("script: bad input is refused with a message") {
   CHECK(!parse_script_text(R"({"view": {"width": 0}})", s, err));
 }
 
+namespace {
+
+// A camera path for a movie: four head keys, uneven spacing, turning as it goes.
+const char* kCameraPath = R"({"interpolation": "%s", "keys": [
+  {"frame": 0,  "head": {"position": [0, 1.6, 0],     "orientation": [0, 0, 0, 1]}},
+  {"frame": 10, "head": {"position": [0.5, 1.7, -0.2], "orientation": [0, 0.3826834, 0, 0.9238795]}},
+  {"frame": 30, "head": {"position": [0.6, 1.5, -0.9], "orientation": [0.1305262, 0.7010574, 0, 0.7010574]}},
+  {"frame": 40, "head": {"position": [0, 1.6, -1.2],   "orientation": [0, 1, 0, 0]}}]})";
+
+Script camera_path(const char* mode) {
+  char text[1024];
+  std::snprintf(text, sizeof text, kCameraPath, mode);
+  Script s;
+  std::string err;
+  REQUIRE_MESSAGE(parse_script_text(text, s, err), err);
+  return s;
+}
+
+// Velocity of the head just before and just after frame f (central differences on each side).
+std::pair<glm::dvec3, glm::dvec3> velocity_around(const Script& s, double f) {
+  const double e = 1e-4;
+  const glm::dvec3 before = (s.at(f).head.position - s.at(f - e).head.position) / e;
+  const glm::dvec3 after = (s.at(f + e).head.position - s.at(f).head.position) / e;
+  return {before, after};
+}
+
+// Angular velocity (radians per frame) just before and after frame f, as rotation vectors.
+std::pair<glm::dvec3, glm::dvec3> spin_around(const Script& s, double f) {
+  const double e = 1e-4;
+  auto rotvec = [](const glm::dquat& a, const glm::dquat& b) {
+    glm::dquat d = b * glm::conjugate(a);
+    if (d.w < 0) d = -d;
+    return 2.0 * glm::dvec3(d.x, d.y, d.z);
+  };
+  return {rotvec(s.at(f - e).head.orientation, s.at(f).head.orientation) / e,
+          rotvec(s.at(f).head.orientation, s.at(f + e).head.orientation) / e};
+}
+
+}  // namespace
+
+TEST_CASE("script: a smooth camera path passes through every key with no velocity jump, easing at the ends") {
+  const Script smooth = camera_path("smooth"), linear = camera_path("linear");
+  REQUIRE(smooth.interpolation == Interpolation::kSmooth);
+  for (const auto& [frame, key] : smooth.keys) {
+    const Pose p = smooth.at(double(frame)).head;
+    check_vec(p.position, key.head.position, 1e-12);
+    CHECK(std::abs(glm::dot(p.orientation, key.head.orientation)) == doctest::Approx(1.0).epsilon(1e-12));
+  }
+  for (double f : {10.0, 30.0}) {
+    const auto [vb, va] = velocity_around(smooth, f);
+    CHECK(glm::length(va - vb) < 1e-3 * glm::length(va));
+    const auto [wb, wa] = spin_around(smooth, f);
+    CHECK(glm::length(wa - wb) < 1e-3 * glm::length(wa));
+    // The check can fail: the linear path's velocity jumps at the same keys.
+    const auto [lb, la] = velocity_around(linear, f);
+    CHECK(glm::length(la - lb) > 0.1 * glm::length(la));
+  }
+  // Eases in and out: no motion at the first and last key.
+  CHECK(glm::length(smooth.at(1e-4).head.position - smooth.at(0.0).head.position) < 1e-6);
+  CHECK(glm::length(smooth.at(40.0).head.position - smooth.at(40.0 - 1e-4).head.position) < 1e-6);
+  for (double f = 0; f <= 40; f += 0.25)
+    CHECK(glm::length(smooth.at(f).head.orientation) == doctest::Approx(1.0).epsilon(1e-12));
+  std::string err;
+  Script bad;
+  CHECK(!parse_script_text(R"({"interpolation": "cubic"})", bad, err));
+  CHECK(err.find("\"smooth\"") != std::string::npos);
+}
+
 TEST_CASE("interaction: thumbstick forward flies along the aim ray (the volume comes closer)") {
   VolumeTransform t = start();
   GrabInteraction g;

@@ -15,8 +15,12 @@
 //
 // Orientation is [x, y, z, w] (OpenXR order). A key changes only what it
 // names; everything else carries over from the key before. Between keys,
-// positions are interpolated linearly and orientations by slerp; buttons,
-// squeeze, trigger and thumbstick step at the key. Other top-level members
+// positions are interpolated linearly and orientations by slerp; with
+// "interpolation": "smooth" (camera movies) positions follow a cubic Hermite
+// spline through the keys (Catmull-Rom tangents over the key frames, zero at
+// the first and last key so a movie eases in and out) and orientations
+// follow SQUAD, so velocity has no jump at a key. Buttons, squeeze, trigger
+// and thumbstick step at the key. Other top-level members
 // (runtime directives) are left in `raw` for whoever understands them.
 //
 // This file does not depend on vxr_core: the test runtime library builds it too.
@@ -45,15 +49,19 @@ struct ScriptFrame {
   ScriptHand hands[2];
 };
 
+enum class Interpolation { kLinear, kSmooth };
+
 struct Script {
   uint32_t width = 128, height = 128;
+  Interpolation interpolation = Interpolation::kLinear;
   double ipd_m = 0.064;
   Fov fov{-0.6981317, 0.6981317, 0.6981317, -0.6981317};  // +-40 degrees
   std::vector<std::pair<uint64_t, ScriptFrame>> keys;       // complete states, ascending frames
   nlohmann::json raw;
 
-  // The state at `frame` (holds the last key's state after it).
-  ScriptFrame at(uint64_t frame) const;
+  // The state at `frame` (holds the last key's state after it); fractional
+  // frames are allowed (sub-frame motion, tests of smoothness).
+  ScriptFrame at(double frame) const;
   uint64_t last_key_frame() const { return keys.empty() ? 0 : keys.back().first; }
 };
 
