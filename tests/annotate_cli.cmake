@@ -92,3 +92,16 @@ file(READ ${DIR}/cards/card-1.json card)
 if(NOT card MATCHES "\"note\": \"Dense spines near the soma\"" OR NOT card MATCHES "\"volume\": \"head.vxc\"")
   message(FATAL_ERROR "card-1.json:\n${card}")
 endif()
+
+# The analysis tools from a script: counting, a measurement, a traced branch.
+set(T ${DIR}/tools_store)
+step(0 "voxel size 0.5,0.5,2 um" "^$" annotate init ${T} --voxel-size 0.5,0.5,2)
+file(WRITE ${DIR}/tools.json [=[{"events": [
+  {"tool": "count", "class": "nucleus"}, {"press": [10, 10, 1]}, {"press": [20, 10, 1]},
+  {"tool": "measure"}, {"press": [0, 0, 0]}, {"move": [2, 0, 0]}, {"release": [0, 0, 1]},
+  {"tool": "trace"}, {"press": [5, 5, 1]}, {"press": [5, 9, 1]}]}]=])
+step(0 "event 1: marker 1 \\(nucleus\\) at \\(10, 10, 1\\)\n.*event 6: measurement 1: 2 um\n.*event 9: node 2 of skeleton 1 below node 1\ncounts at the last timepoint: nucleus 2\n$"
+     "^$" annotate play ${T} ${DIR}/tools.json)
+step(0 "2 markers, 1 measurements, 1 skeletons" "^$" annotate list ${T})
+file(WRITE ${DIR}/bad_tools.json [=[{"events": [{"tool": "count"}, {"prss": [1, 2, 3]}]}]=])
+step(2 "^$" "bad_tools.json: event 1: unknown key \"prss\"" annotate play ${T} ${DIR}/bad_tools.json)

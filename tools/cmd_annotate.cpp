@@ -16,6 +16,7 @@
 #include "annotate/csv_export.h"
 #include "annotate/file_io.h"
 #include "annotate/swc.h"
+#include "annotate/tool_script.h"
 #include "command.h"
 #include "scene/render_settings.h"
 
@@ -144,6 +145,34 @@ void add_annotate_command(CLI::App& app, Invocation& inv) {
         /*create=*/true);
     cmd->add_option("--voxel-size", *voxel, "voxel size x,y,z (default 1,1,1)");
     cmd->add_option("--unit", *unit, "length unit: um, nm or mm (default um)");
+  }
+  {
+    auto store = std::make_shared<std::string>();
+    auto script = std::make_shared<std::string>();
+    auto pick = std::make_shared<double>(5.0);
+    auto* cmd = store_command(
+        *top, inv, "play", "drive the analysis tools (count, measure, trace, track, roi) from a JSON event script",
+        store, [script, pick](AnnotationStore& s) {
+          auto text = read_whole_file(*script);
+          if (!text.is_ok()) return fail_status(text.status());
+          auto steps = parse_tool_script(*text, *script);
+          if (!steps.is_ok()) return fail(steps.status(), kExitUsage);
+          ToolPalette palette(s, *pick);
+          std::string last;
+          const Status st = run_tool_script(palette, *steps, [&last](const ToolStep& step, const ToolLiveState& live) {
+            if (live.last_edit != last) std::printf("event %zu: %s\n", step.index, live.last_edit.c_str());
+            last = live.last_edit;
+          });
+          if (!st) return fail_status(Status(st.code(), *script + ": " + st.message()));
+          std::string counts;
+          for (const auto& [cls, n] : palette.live().counts)
+            counts += (counts.empty() ? "" : ", ") + cls + " " + std::to_string(n);
+          std::printf("counts at the last timepoint: %s\n", counts.empty() ? "none" : counts.c_str());
+          return kExitOk;
+        });
+    cmd->add_option("script", *script, "tool event script (JSON; see engine/annotate/tool_script.h)")->required();
+    cmd->add_option("--pick-radius", *pick, "how near (voxels) pick/remove must be to an item (default 5)")
+        ->check(CLI::Range(0.0, 1e6));
   }
   {
     auto store = std::make_shared<std::string>();
