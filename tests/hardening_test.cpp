@@ -212,6 +212,14 @@ TEST_CASE("output safety: planted symlinks at temp names are never written throu
   CHECK(run_vxr("render " + q(tif) + " --size 16x16 -o " + q(dir / "out.png"), dir).rc == 0);
   CHECK(read_bytes(victim) == "precious");
   CHECK(fs::is_symlink(dir / "out.png.partial"));
+  // Annotation exports (SWC, CSV, card files) used a fixed "<out>.partial" too.
+  const fs::path store = dir / "store";
+  REQUIRE(run_vxr("annotate init " + q(store), dir).rc == 0);
+  REQUIRE(run_vxr("annotate add-marker " + q(store) + " --pos 1,2,3", dir).rc == 0);
+  fs::create_symlink(victim, dir / "points.csv.partial");
+  CHECK(run_vxr("annotate export-csv " + q(store) + " --what points -o " + q(dir / "points.csv"), dir).rc == 0);
+  CHECK(read_bytes(victim) == "precious");
+  CHECK(read_bytes(dir / "points.csv").find("1,2,3") != std::string::npos);
 }
 
 TEST_CASE("output safety: TempFile commits all or nothing and refuses a target that became a folder") {

@@ -481,7 +481,7 @@ void add_annotate_command(CLI::App& app, Invocation& inv) {
                                 const std::string text = skeleton_to_swc(
                                     um, "skeleton " + std::to_string(*skel) + " '" + sk->name() + "' from " + s.path() +
                                             " (vxr " VXR_VERSION "), micrometres");
-                                if (Status st = write_file_atomic(*out, text); !st.is_ok()) return fail(st);
+                                if (Status st = vxr::write_file_atomically(*out, text); !st.is_ok()) return fail(st);
                                 std::printf("%s: %zu samples\n", out->c_str(), um.size());
                                 return kExitOk;
                               });
@@ -519,7 +519,7 @@ void add_annotate_command(CLI::App& app, Invocation& inv) {
                           std::fwrite(csv.data(), 1, csv.size(), stdout);
                           return kExitOk;
                         }
-                        if (Status st = write_file_atomic(*out, csv); !st.is_ok()) return fail(st);
+                        if (Status st = vxr::write_file_atomically(*out, csv); !st.is_ok()) return fail(st);
                         std::printf("%s: %s\n", out->c_str(), what->c_str());
                         return kExitOk;
                       });
@@ -659,7 +659,7 @@ void add_cards_command(CLI::App& app, Invocation& inv) {
           if (!c->audio_wav.empty()) j["memo"] = base + ".wav";
           std::vector<std::string> written;
           auto put = [&](const std::string& path, const std::string& bytes) {
-            Status st = write_file_atomic(path, bytes);
+            Status st = vxr::write_file_atomically(path, bytes);
             if (st.is_ok()) written.push_back(path);
             return st;
           };

@@ -1,4 +1,4 @@
-// Whole-file reads and atomic writes for annotation inputs and exports.
+// Whole-file reads for annotation inputs (SWC, scripts, media).
 #pragma once
 
 #include <string>
@@ -9,7 +9,6 @@ namespace vxr::annotate {
 
 // The file's bytes; errors name the path ("<path>: no such file", ...).
 Result<std::string> read_whole_file(const std::string& path);
-// Writes "<path>.partial", fsyncs, renames over `path`: readers never see half a file.
-Status write_file_atomic(const std::string& path, const std::string& bytes);
+// Writes go through vxr::write_file_atomically (core/output_file.h).
 
 }  // namespace vxr::annotate
