@@ -74,6 +74,16 @@ Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const Comput
 }
 
 Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const FullscreenPipelineCreateInfo& info) {
+  GraphicsPipelineCreateInfo g;
+  g.vertex_shader = info.vertex_shader;
+  g.fragment_shader = info.fragment_shader;
+  g.bindings = info.bindings;
+  g.color_formats = {info.color_format};
+  g.specialization = info.specialization;
+  return create_graphics_pipeline(ctx, g);
+}
+
+Result<ComputePipeline> create_graphics_pipeline(const Context& ctx, const GraphicsPipelineCreateInfo& info) {
   VkDevice dev = ctx.device();
   ComputePipeline p;
   VXR_RETURN_IF_ERROR(create_layouts(ctx, info.bindings, 0, p));
@@ -100,24 +110,30 @@ Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const Ful
   vp.scissorCount = 1;
   VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
   rs.polygonMode = VK_POLYGON_MODE_FILL;
-  rs.cullMode = VK_CULL_MODE_NONE;
+  rs.cullMode = info.cull_mode;
   rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
   rs.lineWidth = 1.0f;
   VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
   ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
-  VkPipelineColorBlendAttachmentState att{};
-  att.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
-                       VK_COLOR_COMPONENT_A_BIT;
+  VkPipelineDepthStencilStateCreateInfo dss{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+  dss.depthTestEnable = info.depth_format != VK_FORMAT_UNDEFINED;
+  dss.depthWriteEnable = dss.depthTestEnable;
+  dss.depthCompareOp = VK_COMPARE_OP_LESS;
+  std::vector<VkPipelineColorBlendAttachmentState> atts(info.color_formats.size());
+  for (auto& att : atts)
+    att.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
+                         VK_COLOR_COMPONENT_A_BIT;
   VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-  cb.attachmentCount = 1;
-  cb.pAttachments = &att;
+  cb.attachmentCount = static_cast<uint32_t>(atts.size());
+  cb.pAttachments = atts.data();
   const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
   VkPipelineDynamicStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
   ds.dynamicStateCount = 2;
   ds.pDynamicStates = dyn;
   VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
-  rendering.colorAttachmentCount = 1;
-  rendering.pColorAttachmentFormats = &info.color_format;
+  rendering.colorAttachmentCount = static_cast<uint32_t>(info.color_formats.size());
+  rendering.pColorAttachmentFormats = info.color_formats.data();
+  rendering.depthAttachmentFormat = info.depth_format;
 
   VkGraphicsPipelineCreateInfo ci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
   ci.pNext = &rendering;
@@ -128,6 +144,7 @@ Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const Ful
   ci.pViewportState = &vp;
   ci.pRasterizationState = &rs;
   ci.pMultisampleState = &ms;
+  ci.pDepthStencilState = info.depth_format != VK_FORMAT_UNDEFINED ? &dss : nullptr;
   ci.pColorBlendState = &cb;
   ci.pDynamicState = &ds;
   ci.layout = p.layout;

@@ -45,6 +45,22 @@ struct FullscreenPipelineCreateInfo {
 // Same members as a compute pipeline: set layout, layout, pipeline.
 Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const FullscreenPipelineCreateInfo& info);
 
+// A graphics pipeline for dynamic rendering with no vertex buffers (the vertex
+// shader builds its geometry from gl_VertexIndex / gl_InstanceIndex and
+// storage buffers), any number of colour attachments (no blending), an
+// optional depth attachment with a LESS test and writes. Viewport and scissor
+// are dynamic.
+struct GraphicsPipelineCreateInfo {
+  std::string_view vertex_shader;
+  std::string_view fragment_shader;
+  std::vector<VkDescriptorSetLayoutBinding> bindings;  // set 0
+  std::vector<VkFormat> color_formats{VK_FORMAT_R8G8B8A8_UNORM};
+  VkFormat depth_format = VK_FORMAT_UNDEFINED;  // none
+  VkCullModeFlags cull_mode = VK_CULL_MODE_NONE;
+  std::vector<SpecializationConstant> specialization;  // fragment stage
+};
+Result<ComputePipeline> create_graphics_pipeline(const Context& ctx, const GraphicsPipelineCreateInfo& info);
+
 // A descriptor pool sized for `max_sets` sets of the given bindings each.
 Result<Handle<VkDescriptorPool>> create_descriptor_pool(const Context& ctx,
                                                         const std::vector<VkDescriptorSetLayoutBinding>& bindings,

@@ -29,7 +29,7 @@ Camera orbit_camera(const VolumePlacement& v, double azimuth_deg, double elevati
   return c;
 }
 
-VoxelSpaceRays rays_in_voxel_space(const Camera& c, const VolumePlacement& v, uint32_t width, uint32_t height) {
+PixelRays rays_in_world(const Camera& c, uint32_t width, uint32_t height) {
   const glm::dvec3 f = glm::normalize(c.target - c.eye);
   glm::dvec3 r = glm::cross(f, c.up);
   if (glm::length(r) < 1e-12) r = glm::cross(f, glm::dvec3(1, 0, 0));  // looking straight along up
@@ -40,15 +40,18 @@ VoxelSpaceRays rays_in_voxel_space(const Camera& c, const VolumePlacement& v, ui
     // direction, scale the half-extent. Top image row is `up`.
     const FrustumTangents& t = *c.frustum;
     const glm::dvec3 centre = f + r * (0.5 * (t.right + t.left)) + u * (0.5 * (t.up + t.down));
-    return {v.world_to_voxel_point(c.eye), v.world_to_voxel_vector(centre),
-            v.world_to_voxel_vector(r * (0.5 * (t.right - t.left))),
-            v.world_to_voxel_vector(u * (0.5 * (t.up - t.down)))};
+    return {c.eye, centre, r * (0.5 * (t.right - t.left)), u * (0.5 * (t.up - t.down))};
   }
   const double ty = std::tan(glm::radians(c.fov_y_deg) * 0.5);
   const double tx = ty * static_cast<double>(width) / static_cast<double>(height);
+  return {c.eye, f, r * tx, u * ty};
+}
+
+VoxelSpaceRays rays_in_voxel_space(const Camera& c, const VolumePlacement& v, uint32_t width, uint32_t height) {
   // Directions are mapped linearly, so a pixel's ray maps exactly into voxel space.
-  return {v.world_to_voxel_point(c.eye), v.world_to_voxel_vector(f), v.world_to_voxel_vector(r * tx),
-          v.world_to_voxel_vector(u * ty)};
+  const PixelRays w = rays_in_world(c, width, height);
+  return {v.world_to_voxel_point(w.eye), v.world_to_voxel_vector(w.forward), v.world_to_voxel_vector(w.right),
+          v.world_to_voxel_vector(w.up)};
 }
 
 glm::dvec3 pixel_ray(const VoxelSpaceRays& r, uint32_t width, uint32_t height, uint32_t x, uint32_t y) {

@@ -48,10 +48,17 @@ struct VolumePlacement {
 Camera orbit_camera(const VolumePlacement& v, double azimuth_deg, double elevation_deg, double distance = 1.6,
                     double fov_y_deg = 40.0);
 
-// The eye and pixel-direction basis in voxel space, as the ray caster wants it.
-struct VoxelSpaceRays {
+// The eye and pixel-direction basis: pixel (nx, ny) looks along
+// forward + nx right - ny up (see pixel_ray). In world space forward is a unit
+// vector (off-axis: its component along the view axis is 1) and right/up are
+// scaled by the frustum's half-extent tangents, so t along that direction is
+// view depth.
+struct PixelRays {
   glm::dvec3 eye, forward, right, up;  // right/up scaled by tan(fov/2) (and aspect for right)
 };
+using VoxelSpaceRays = PixelRays;
+PixelRays rays_in_world(const Camera& c, uint32_t width, uint32_t height);
+// The same rays in a volume's voxel space, as the ray casters want them.
 VoxelSpaceRays rays_in_voxel_space(const Camera& c, const VolumePlacement& v, uint32_t width, uint32_t height);
 
 // Pixel (x, y)'s unit ray direction in voxel space (pixel centres, top row

@@ -1,0 +1,191 @@
+#include "render/annotation_renderer.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "core/trace.h"
+#include "shared/imposter_params.h"
+
+namespace vxr {
+namespace {
+
+glm::vec4 to_vec4(const glm::dvec3& v, double w) { return glm::vec4(float(v.x), float(v.y), float(v.z), float(w)); }
+
+glm::dvec3 world_of(const VolumePlacement& v, const annotate::Vec3& voxel) {
+  // Volume coordinates have voxel centres at i + 0.5 and the box centred at `origin`.
+  const glm::dvec3 dims(v.dims[0], v.dims[1], v.dims[2]);
+  return v.origin + (glm::dvec3(voxel[0], voxel[1], voxel[2]) - 0.5 * dims) *
+                        glm::dvec3(v.voxel_size[0], v.voxel_size[1], v.voxel_size[2]);
+}
+
+std::vector<VkDescriptorSetLayoutBinding> bindings() {
+  const VkShaderStageFlags stages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+  return {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, stages, nullptr},
+          {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, stages, nullptr}};
+}
+
+}  // namespace
+
+AnnotationScene annotation_scene(std::span<const annotate::Marker> markers,
+                                 std::span<const annotate::Skeleton> skeletons, const VolumePlacement& placement,
+                                 uint32_t timepoint, double marker_radius, double min_node_radius,
+                                 glm::vec4 skeleton_color) {
+  AnnotationScene scene;
+  for (const annotate::Marker& m : markers) {
+    if (m.timepoint != timepoint) continue;
+    scene.spheres.push_back({world_of(placement, m.pos), marker_radius,
+                             glm::vec4(float(m.color[0]), float(m.color[1]), float(m.color[2]), float(m.color[3]))});
+  }
+  for (const annotate::Skeleton& sk : skeletons) {
+    for (const auto& [id, n] : sk.nodes()) {
+      const double r = std::max(n.radius, min_node_radius);
+      scene.spheres.push_back({world_of(placement, n.pos), r, skeleton_color});
+      if (n.parent == annotate::kNoParent) continue;
+      const annotate::SkeletonNode* p = sk.find(n.parent);
+      if (!p) continue;
+      scene.cones.push_back({world_of(placement, p->pos), world_of(placement, n.pos), std::max(p->radius, min_node_radius),
+                             r, skeleton_color});
+    }
+  }
+  return scene;
+}
+
+Result<std::unique_ptr<AnnotationRenderer>> AnnotationRenderer::create(gpu::Context& ctx) {
+  std::unique_ptr<AnnotationRenderer> r(new AnnotationRenderer(ctx));
+  gpu::GraphicsPipelineCreateInfo info;
+  info.vertex_shader = "imposter.vert";
+  info.fragment_shader = "imposter.frag";
+  info.bindings = bindings();
+  info.color_formats = {VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_R32_SFLOAT};
+  info.depth_format = VK_FORMAT_D32_SFLOAT;
+  VXR_ASSIGN_OR_RETURN(r->pipeline_, gpu::create_graphics_pipeline(ctx, info));
+  VXR_ASSIGN_OR_RETURN(r->pool_, gpu::create_descriptor_pool(ctx, info.bindings, 1));
+  VXR_ASSIGN_OR_RETURN(r->set_, gpu::allocate_descriptor_set(ctx, r->pool_, r->pipeline_.set_layout));
+  VXR_ASSIGN_OR_RETURN(r->view_, gpu::create_buffer(ctx, {sizeof(shader::ImposterView),
+                                                          VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                                          gpu::MemoryIntent::kUpload, "imposter view"}));
+  gpu::write_uniform_buffer(ctx, r->set_, 1, r->view_.buffer);
+  return r;
+}
+
+Status AnnotationRenderer::ensure_targets(uint32_t width, uint32_t height) {
+  if (color_.extent.width == width && color_.extent.height == height) return Status::ok();
+  const VkExtent3D e{width, height, 1};
+  VXR_ASSIGN_OR_RETURN(color_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, VK_FORMAT_R8G8B8A8_UNORM, e,
+                                                        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
+                                                            VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                                                        "annotation colour"}));
+  VXR_ASSIGN_OR_RETURN(depth_out_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32_SFLOAT, e,
+                                                            VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
+                                                                VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                                                            "annotation view depth"}));
+  VXR_ASSIGN_OR_RETURN(zbuffer_, gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, VK_FORMAT_D32_SFLOAT, e,
+                                                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                                                          "annotation z-buffer"}));
+  return Status::ok();
+}
+
+Result<AnnotationImage> AnnotationRenderer::render(const Camera& camera, const AnnotationScene& scene, uint32_t width,
+                                                   uint32_t height) {
+  VXR_TRACE_SCOPE("annotations.render");
+  if (width == 0 || height == 0) return invalid_argument("annotations: image size has a zero side");
+  VXR_RETURN_IF_ERROR(ensure_targets(width, height));
+
+  // Primitives camera-relative, in double until the last step.
+  const PixelRays rays = rays_in_world(camera, width, height);
+  std::vector<shader::ImposterPrimitive> prims;
+  prims.reserve(scene.spheres.size() + scene.cones.size());
+  for (const AnnotationSphere& s : scene.spheres) {
+    if (!(s.radius > 0.0)) continue;
+    prims.push_back({to_vec4(s.centre - rays.eye, s.radius), glm::vec4(0, 0, 0, -1), s.color});
+  }
+  for (const AnnotationCone& c : scene.cones) {
+    if (!(c.ra > 0.0) || !(c.rb > 0.0)) continue;
+    prims.push_back({to_vec4(c.a - rays.eye, c.ra), to_vec4(c.b - rays.eye, c.rb), c.color});
+  }
+  const VkDeviceSize bytes = std::max<VkDeviceSize>(1, prims.size()) * sizeof(shader::ImposterPrimitive);
+  if (prims_.size < bytes) {
+    VXR_ASSIGN_OR_RETURN(prims_, gpu::create_buffer(ctx_, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                           gpu::MemoryIntent::kUpload, "imposter primitives"}));
+    gpu::write_storage_buffer(ctx_, set_, 0, prims_.buffer);
+  }
+  if (!prims.empty()) std::memcpy(prims_.mapped, prims.data(), prims.size() * sizeof(shader::ImposterPrimitive));
+
+  // [forward right up] maps (s, s nx, -s ny) to a camera-relative point; the
+  // vertex shader needs the inverse.
+  const glm::dmat3 m(rays.forward, rays.right, rays.up);
+  const glm::dmat3 inv = glm::inverse(m);
+  shader::ImposterView v{};
+  v.to_ray0 = to_vec4(glm::dvec3(inv[0][0], inv[1][0], inv[2][0]), 0);
+  v.to_ray1 = to_vec4(glm::dvec3(inv[0][1], inv[1][1], inv[2][1]), 0);
+  v.to_ray2 = to_vec4(glm::dvec3(inv[0][2], inv[1][2], inv[2][2]), 0);
+  v.forward = to_vec4(rays.forward, 0);
+  v.right = to_vec4(rays.right, 0);
+  v.up = to_vec4(rays.up, 0);
+  // Window depth t / (t + scale): scale near the scene's distance keeps the float z-buffer's
+  // resolution where the primitives are.
+  const double scale = std::max(1e-6, glm::length(camera.target - camera.eye));
+  v.size = glm::vec4(float(width), float(height), float(scale), 0.0f);
+  std::memcpy(view_.mapped, &v, sizeof v);
+
+  VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+    for (gpu::Image* img : {&color_, &depth_out_})
+      gpu::transition_image(cmd, *img, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                            VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    gpu::transition_image(cmd, zbuffer_, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                          VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                          VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT |
+                              VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+    VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
+                                           {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
+    colors[0].imageView = color_.view;
+    colors[0].clearValue.color = {{0.0f, 0.0f, 0.0f, 0.0f}};
+    colors[1].imageView = depth_out_.view;
+    colors[1].clearValue.color = {{std::numeric_limits<float>::infinity(), 0.0f, 0.0f, 0.0f}};
+    for (auto& c : colors) {
+      c.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+      c.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+      c.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    }
+    VkRenderingAttachmentInfo z{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    z.imageView = zbuffer_.view;
+    z.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+    z.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    z.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    z.clearValue.depthStencil = {1.0f, 0};
+    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    ri.renderArea = {{0, 0}, {width, height}};
+    ri.layerCount = 1;
+    ri.colorAttachmentCount = 2;
+    ri.pColorAttachments = colors;
+    ri.pDepthAttachment = &z;
+    vkCmdBeginRendering(cmd, &ri);
+    if (!prims.empty()) {
+      const VkViewport vp{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
+      const VkRect2D sc{{0, 0}, {width, height}};
+      vkCmdSetViewport(cmd, 0, 1, &vp);
+      vkCmdSetScissor(cmd, 0, 1, &sc);
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.pipeline);
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout, 0, 1, &set_, 0, nullptr);
+      vkCmdDraw(cmd, 36, uint32_t(prims.size()), 0, 0);
+    }
+    vkCmdEndRendering(cmd);
+  }));
+
+  AnnotationImage out{ImageRgba8(width, height), std::vector<float>(size_t(width) * height)};
+  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, color_, out.color.pixels.data(), out.color.pixels.size()));
+  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, depth_out_, out.view_depth.data(), out.view_depth.size() * sizeof(float)));
+  return out;
+}
+
+ImageRgba8 composite_volume_over(const ImageRgbaF& volume, const ImageRgba8& annotations) {
+  ImageRgbaF out = volume;
+  for (size_t i = 0; i + 3 < out.rgba.size(); i += 4) {
+    const float keep = 1.0f - std::clamp(volume.rgba[i + 3], 0.0f, 1.0f);
+    for (int c = 0; c < 4; ++c) out.rgba[i + c] += keep * (float(annotations.pixels[i + c]) / 255.0f);
+  }
+  return to_rgba8(out);
+}
+
+}  // namespace vxr
