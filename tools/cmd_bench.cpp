@@ -15,6 +15,7 @@ void add_bench_command(CLI::App& app, Invocation& inv) {
   bench::add_synth_tiff_bench(*bench, inv);
   bench::add_stability_bench(*bench, inv);
   bench::add_accuracy_bench(*bench, inv);
+  bench::add_movie_bench(*bench, inv);
 }
 
 }  // namespace vxr::cli

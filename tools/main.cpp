@@ -52,6 +52,7 @@ int run_vxr(int argc, char** argv) {
   add_cards_command(app, inv);
   add_project_command(app, inv);
   add_catalog_command(app, inv);
+  add_play_command(app, inv);
 
   // CLI11 reports a stray word as "a subcommand is required"; name it instead.
   if (argc > 1 && argv[1][0] != '-' && !has_subcommand(app, argv[1])) {
