@@ -178,11 +178,12 @@ class BrickRenderer final : public VolumeRenderer {
                      const std::vector<glm::uvec2>& waves, const RenderTarget& target, uint32_t* dispatches);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
   // `dst` (capacity entries); returns (first item, count) per wave.
+  // `ax`, `ay`: the ray grid (identity_warp, or the lens warp's).
   Result<std::vector<glm::uvec2>> build_waves(const std::vector<ChunkKey>& draw, const LodView& view,
-                                              glm::uvec4* dst, size_t capacity, size_t* used);
+                                              const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
   // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen rectangle touches it.
-  Status build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, glm::uvec4* dst, size_t capacity,
-                          size_t* used);
+  Status build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, const WarpAxis& ax,
+                          const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
   gpu::Context& ctx_;
@@ -214,6 +215,7 @@ class BrickRenderer final : public VolumeRenderer {
   uint32_t apron_wanted_ = 0;        // a view needed a wider apron: the next begin_frame rebuilds the pool
   std::vector<glm::dvec3> ray_dirs_;  // per pixel 1/direction, for build_waves
   std::tuple<glm::dvec3, glm::dvec3, glm::dvec3> rays_for_;
+  glm::uvec4 rays_grid_{0};  // ray_dirs_'s grid: full sizes and warp bands
   std::vector<uint32_t> pixel_wave_;
   std::vector<double> value_scales_;  // per drawn channel: data units per texel unit
 };
