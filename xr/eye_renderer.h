@@ -1,6 +1,6 @@
 // Records the views of a frame through the out-of-core renderer
 // (VolumeRenderer, implemented by BrickRenderer) into a FrameTarget's images:
-// the frame loop records every eye, lens-warp tiles included, into one
+// the frame loop records every eye, lens warp included, into one
 // command buffer and submits it once; nothing is read back.
 //
 // Lens warp: the warped grid (xr/lens_warp.h) is ONE view whose rays follow

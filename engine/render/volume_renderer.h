@@ -5,7 +5,7 @@
 //
 //   wait for the previous frame's fence
 //   begin_frame(cmd)                       // bricks that arrived are copied in
-//   record_view(cmd, camera, ..., target)  // per eye (or lens-warp tile)
+//   record_view(cmd, camera, ..., target)  // per eye
 //   submit cmd; the next begin_frame waits for it
 //
 // The out-of-core BrickRenderer (render/lod/brick_renderer.h) implements it;
