@@ -35,6 +35,9 @@ struct BrickFrameSettings {
   LodSettings lod;
   uint64_t upload_budget_bytes = UINT64_MAX;  // per frame; at least one brick is uploaded
   BrickPassMode mode = BrickPassMode::kAuto;
+  // With lod.skip_empty, rays also jump the empty cells inside drawn bricks
+  // (BrickCells; same image). Off: brick-level skipping only (measurements).
+  bool skip_cells = true;
 };
 
 struct BrickFrameStats {

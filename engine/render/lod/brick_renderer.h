@@ -172,10 +172,12 @@ class BrickRenderer final : public VolumeRenderer {
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
                    const LodSettings& clip) const;
   // Records one view's dispatches with `set` and writes the result into `target`.
+  // `skip_cells`: rays jump the empty cells of each brick (BrickCells).
   // `model`: the packed parameters' VXR_MODEL_* (control.x).
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
-                     const std::vector<glm::uvec2>& waves, const RenderTarget& target, uint32_t* dispatches);
+                     const std::vector<glm::uvec2>& waves, const RenderTarget& target, bool skip_cells,
+                     uint32_t* dispatches);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
   // `dst` (capacity entries); returns (first item, count) per wave.
   Result<std::vector<glm::uvec2>> build_waves(const std::vector<ChunkKey>& draw, const LodView& view,
