@@ -14,7 +14,7 @@ cd "$root"
 # Harnesses write their input to a scratch file: keep that in memory when we can.
 if [[ -z "${TMPDIR:-}" && -d /dev/shm ]]; then export TMPDIR=/dev/shm; fi
 # Leaks inside third-party libraries only (each listed with its reason).
-export LSAN_OPTIONS="suppressions=$root/tests/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+export LSAN_OPTIONS="suppressions=$root/tests/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 seconds="${1:-60}"
 shift || true
 all=(tiff ims slices raw_sidecar container codec settings)

@@ -107,7 +107,7 @@ TEST_CASE("tools: tracing chains nodes, branches from a picked node, removes bac
   CHECK(tools.apply(ev(ToolAction::kPick, {100, 0, 0})).code() == ErrorCode::kNotFound);
 }
 
-TEST_CASE("tools: tracking links one marker per timepoint; a second at the same timepoint is refused cleanly") {
+TEST_CASE("tools: tracking links one marker per timepoint, a second at the same timepoint is refused cleanly") {
   auto store = fresh_store("track");
   ToolPalette tools(*store);
   tools.select_tool(Tool::kTrack);
@@ -140,7 +140,7 @@ TEST_CASE("tools: an ROI box is dragged corner to corner and counts the markers 
   CHECK(store->rois()->empty());
 }
 
-TEST_CASE("tool scripts: a script drives every tool; bad scripts name the event and the key") {
+TEST_CASE("tool scripts: a script drives every tool, bad scripts name the event and the key") {
   auto store = fresh_store("script");
   ToolPalette tools(*store);
   auto steps = parse_tool_script(R"({"events": [

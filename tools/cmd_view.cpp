@@ -6,13 +6,17 @@
 // Auto choice: OpenXR when a runtime answers and has a headset, else the
 // desktop window when a display is there, else headless. --xr / --desktop /
 // --headless force one; --frames N renders N frames and exits cleanly.
+#include <stdlib.h>
+
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "command.h"
 #include "core/output_file.h"
 #include "render/volume_session.h"
 #include "xr/headless/headless_target.h"
+#include "xr/headless/movie.h"
 #include "xr/target_factory.h"
 #include "xr/view_session.h"
 
@@ -34,14 +38,39 @@ struct Options {
   uint32_t width = 0, height = 0;
   double frame_budget_ms = 0.0, lod_bias = 0.0;
   std::string json;
+  std::string movie;
+  double fps = 30.0;
   SessionFlags flags;
 };
+
+// --movie: a scratch folder for the frames, beside the movie ("<dir>/.<name>.frames.XXXXXX").
+Result<std::string> movie_scratch_dir(const std::string& movie) {
+  const std::filesystem::path out(movie);
+  std::string templ = ((out.has_parent_path() ? out.parent_path() : std::filesystem::path(".")) /
+                       ("." + out.filename().string() + ".frames.XXXXXX"))
+                          .string();
+  if (!::mkdtemp(templ.data())) return io_error(movie + ": cannot create a scratch folder for the frames beside it");
+  return templ;
+}
 
 int run(const Options& o) {
   if (o.frame_budget_ms < 0.0) return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
   if (!o.json.empty()) {
     const std::string inputs[] = {o.input};
     if (Status st = check_output(o.json, inputs, "--json"); !st) return fail(st, kExitUsage);
+  }
+  if (!o.movie.empty()) {
+    const std::string inputs[] = {o.input, o.script};
+    if (Status st = check_output(o.movie, inputs, "--movie"); !st) return fail(st, kExitUsage);
+    if (std::filesystem::path(o.movie).extension() != ".mp4")
+      return fail(invalid_argument("--movie " + o.movie + ": give a .mp4 name (for PNG frames use --png-dir)"),
+                  kExitUsage);
+    if (o.force_xr || o.force_desktop)
+      return fail(invalid_argument("--movie renders headless; drop --xr/--desktop"), kExitUsage);
+    if (!o.png_dir.empty()) return fail(invalid_argument("--movie and --png-dir: give one"), kExitUsage);
+    if (xr::find_ffmpeg().empty())  // say so before rendering anything
+      return fail(unsupported(o.movie + ": writing MP4 needs ffmpeg, which is not installed (apt-get install "
+                                        "ffmpeg); or write the PNG sequence with --png-dir DIR --png-every-frame"));
   }
   auto session = open_volume_session(o.sample ? "" : o.input, o.flags);
   if (!session) {
@@ -64,6 +93,16 @@ int run(const Options& o) {
   if (o.height) req.headless.script.height = o.height;
   req.headless.png_dir = o.png_dir;
   req.headless.png_every_frame = o.png_every_frame;
+  std::string movie_frames;
+  if (!o.movie.empty()) {
+    auto dir = movie_scratch_dir(o.movie);
+    if (!dir) return fail(dir.status());
+    movie_frames = *dir;
+    req.kind = xr::TargetKind::kHeadless;
+    req.headless.png_dir = movie_frames;
+    req.headless.png_every_frame = true;
+    req.headless.stereo = false;  // one view from the head: the camera
+  }
   if (o.frames) req.headless.end_frame = o.frames;
   req.desktop_stereo = o.stereo;
   req.desktop_screenshot = o.screenshot;
@@ -87,6 +126,13 @@ int run(const Options& o) {
                                   info.voxel_size};
   auto stats = xr::run_view(choice->factory, session->source, vo, xr::default_volume_transform(placement));
   if (!stats) return fail(stats.status());
+  if (!o.movie.empty()) {
+    if (Status st = xr::encode_movie(movie_frames, o.fps, o.movie); !st) return fail(st);
+    std::error_code ec;
+    std::filesystem::remove_all(movie_frames, ec);
+    std::printf("vxr view: movie %s: %llu frames at %.6g fps\n", o.movie.c_str(),
+                static_cast<unsigned long long>(stats->frames_rendered), o.fps);
+  }
   if (!o.json.empty()) {
     nlohmann::json j = xr::view_stats_json(*stats, vo);
     j["input"] = session->description;
@@ -131,6 +177,9 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--lod-bias", o->lod_bias, "log2 voxel-to-pixel ratio (start value with --frame-budget-ms)");
   cmd->add_option("--json", o->json,
                   "write frame figures here: p50/p99 frame ms, frames complete, pipelines after frame 1, readbacks");
+  cmd->add_option("--movie", o->movie,
+                  "headless: render the pose script's camera path (one view) and write it as an MP4 (needs ffmpeg)");
+  cmd->add_option("--fps", o->fps, "--movie: frames per second (default 30)")->check(CLI::Range(0.001, 1000.0));
   cmd->add_option("--colormap", o->flags.colormap, "colormap name (default hot)");
   cmd->add_option("--window", o->flags.window, "LO,HI data window (default: from the data)");
   cmd->add_option("--model", o->flags.model, "optical model: ea, emission or mip");

@@ -1,5 +1,7 @@
 #include "gpu/context.h"
 
+#include <dlfcn.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cstdlib>
@@ -12,6 +14,24 @@
 
 namespace vxr::gpu {
 namespace {
+
+#if defined(__SANITIZE_ADDRESS__)
+// LeakSanitizer reports at exit, when the Vulkan loader has already dlclosed
+// the driver and the validation layer: their allocations would show up as
+// "<unknown module>" and no suppression (tests/lsan.supp) could tell them from
+// ours. Pinning them (RTLD_NODELETE) keeps them nameable. Sanitizer builds only.
+void pin_vulkan_modules_for_leak_reports() {
+  static const bool pinned = [] {
+    for (const char* lib : {"libvulkan_lvp.so", "libVkLayer_khronos_validation.so", "libvulkan_radeon.so",
+                            "libvulkan_intel.so"})
+      (void)::dlopen(lib, RTLD_NOW | RTLD_NODELETE | RTLD_GLOBAL);
+    return true;
+  }();
+  (void)pinned;
+}
+#else
+void pin_vulkan_modules_for_leak_reports() {}
+#endif
 
 std::atomic<uint64_t> g_validation_messages{0};
 std::mutex g_first_mutex;
@@ -97,6 +117,7 @@ Result<std::unique_ptr<Context>> Context::create(const ContextOptions& options) 
 }
 
 Status Context::init(const ContextOptions& options) {
+  pin_vulkan_modules_for_leak_reports();
   // The loader and lavapipe want a runtime dir; CI machines may not set one.
   if (!std::getenv("XDG_RUNTIME_DIR")) setenv("XDG_RUNTIME_DIR", "/tmp", 0);
 
