@@ -50,6 +50,7 @@ struct BrickFrameStats {
   uint32_t dispatches = 0;
   double traverse_ms = 0.0;      // CPU octree traversal
   double render_ms = 0.0;        // ray-cast submission, wall clock
+  double gpu_ms = 0.0;           // BrickRenderer::render: the frame's commands on the GPU (timestamps; 0: none)
 };
 
 // An image on the renderer's device that a view is drawn into.

@@ -199,6 +199,15 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->items_, gpu::create_buffer(ctx, {uint64_t(options.max_work_items) * sizeof(glm::uvec4),
                                                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                            gpu::MemoryIntent::kUpload, "brick work items"}));
+  if (ctx.timestamp_period_ns() > 0.0) {
+    VkQueryPoolCreateInfo qi{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    qi.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    qi.queryCount = 2;
+    VkQueryPool qp = VK_NULL_HANDLE;
+    if (VkResult vr = vkCreateQueryPool(ctx.device(), &qi, nullptr, &qp); vr != VK_SUCCESS)
+      return internal_error("brick renderer: vkCreateQueryPool failed (" + std::to_string(int(vr)) + ")");
+    r->timestamps_ = gpu::Handle<VkQueryPool>(ctx.device(), qp);
+  }
   r->params_stride_ = align_up(sizeof(shader::RaycastParams), ctx.limits().minUniformBufferOffsetAlignment);
   VXR_ASSIGN_OR_RETURN(r->params_, gpu::create_buffer(ctx, {r->params_stride_ * options.max_views,
                                                             VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
@@ -808,10 +817,23 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
   const RenderTarget target{target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL};
   const auto t0 = std::chrono::steady_clock::now();
   VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+    if (timestamps_) {
+      vkCmdResetQueryPool(cmd, timestamps_, 0, 2);
+      vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, timestamps_, 0);
+    }
     recorded = begin_frame(cmd, frame);
     if (recorded) recorded = record_view(cmd, camera, s, frame, target, &st);
+    if (timestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_BOTTOM_OF_PIPE_BIT, timestamps_, 1);
   }));
   VXR_RETURN_IF_ERROR(recorded);
+  if (timestamps_) {
+    uint64_t ticks[2] = {0, 0};
+    if (VkResult vr = vkGetQueryPoolResults(ctx_.device(), timestamps_, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
+                                            VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
+        vr != VK_SUCCESS)
+      return internal_error("brick renderer: vkGetQueryPoolResults failed (" + std::to_string(int(vr)) + ")");
+    st.gpu_ms = double(ticks[1] - ticks[0]) * ctx_.timestamp_period_ns() * 1e-6;
+  }
   st.render_ms = ms_since(t0) - st.traverse_ms;
   uint32_t c[2];
   std::memcpy(c, counters_.mapped, 8);

@@ -201,6 +201,7 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, tf_staging_;
+  gpu::Handle<VkQueryPool> timestamps_;  // render(): two per frame; null without timestamps
   VkDeviceSize params_stride_ = 0;
   // This frame: views recorded, and the table / work-list entries they took.
   uint32_t views_ = 0;
