@@ -4,10 +4,16 @@
 #include <doctest/doctest.h>
 
 #include <cstdio>
+#include <cstdlib>
 
 #include "gpu/context.h"
+#include "core/sanitizer_defaults.h"
 
 int main(int argc, char** argv) {
+  // What ctest's environment would say; set here because doctest's test
+  // discovery passes only the first entry of an ENVIRONMENT list.
+  setenv("XDG_RUNTIME_DIR", "/tmp", 0);
+  setenv("VXR_PIPELINE_CACHE", VXR_TEST_OUT_DIR "/../pipelines.bin", 0);
   doctest::Context context(argc, argv);
   int rc = context.run();
   if (context.shouldExit()) return rc;

@@ -3,6 +3,7 @@
 #include <exception>
 #include <new>
 
+#include "core/sanitizer_defaults.h"
 #include "command.h"
 #include "core/trace.h"
 #include "gpu/context.h"

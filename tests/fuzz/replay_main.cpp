@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "fuzz_util.h"
+#include "core/sanitizer_defaults.h"
 
 int main(int argc, char** argv) {
   std::vector<std::filesystem::path> files;
