@@ -164,10 +164,10 @@ bool cell_is_empty(uint slot, int cell, VxrRay r) {
   return true;
 }
 
-// Where the ray leaves cell `cell` (grown by a quarter voxel), in t units.
-float cell_exit(ivec3 cell, vec3 e, vec3 dl) {
+// Where the ray leaves cell `cell` grown by `grow` voxels, in t units.
+float cell_exit(ivec3 cell, vec3 e, vec3 dl, float grow) {
   const float s = p.atlas_inv.w;
-  const vec3 lo = vec3(cell) * s - 0.25, hi = vec3(cell + 1) * s + 0.25;
+  const vec3 lo = vec3(cell) * s - grow, hi = vec3(cell + 1) * s + grow;
   // The ray is inside the box: a zero direction component gives +-inf, never 0 * inf.
   const vec3 inv = 1.0 / dl;
   const vec3 tmax = max((lo - e) * inv, (hi - e) * inv);
@@ -241,22 +241,22 @@ void main() {
     // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture).
     const bool cells = p.pass.y != 0u && bricks[b].atlas.w >= 0.0;
     const uint slot = cells ? uint(bricks[b].atlas.w) : 0u;
-    int tested = -1;  // the last cell tested and found occupied
+    // Samples before this t lie in a cell found occupied: marched without a test.
+    float occupied_until = -1.0;
     for (int k = 0; k < n && !ray.done; ++k) {
       // From the index: no drift. The segment is dt level-0 voxels long.
       const float t = (i0 + float(k) + 0.5) * dt;
-      if (cells) {
+      if (cells && t >= occupied_until) {
         const ivec3 c3 = clamp(ivec3(floor((e + t * dl) / p.atlas_inv.w)), ivec3(0), ivec3(int(p.pass.y) - 1));
         const int cell = (c3.z * int(p.pass.y) + c3.y) * int(p.pass.y) + c3.x;
-        if (cell != tested) {
-          if (cell_is_empty(slot, cell, ray)) {
-            // The first sample at or past the exit; the ones before it lie in the grown cell.
-            const int next = int(ceil(cell_exit(c3, e, dl) / dt - 0.5 - i0));
-            k = max(k, next - 1);
-            continue;
-          }
-          tested = cell;
+        if (cell_is_empty(slot, cell, ray)) {
+          // The first sample at or past the exit of the cell grown by a quarter
+          // voxel; the ones before it lie within the half voxel its range covers.
+          const int next = int(ceil(cell_exit(c3, e, dl, 0.25) / dt - 0.5 - i0));
+          k = max(k, next - 1);
+          continue;
         }
+        occupied_until = cell_exit(c3, e, dl, 0.0);  // taking samples is always right: no margin needed
       }
       vxr_step(ray, P, e, dl, t, dt);
       ++taken;
