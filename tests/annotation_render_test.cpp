@@ -77,6 +77,25 @@ AnnotationScene test_scene() {
   return s;
 }
 
+// The MRI head (gray EA) with a dense ray caster and an annotation renderer:
+// the scene markers and meshes are composited into.
+struct HeadScene {
+  DenseVolume volume = test::mri();
+  std::unique_ptr<Raycaster> caster;
+  std::unique_ptr<AnnotationRenderer> annotations;
+  Camera camera = test::mri_camera(volume);
+  RenderSettings settings = test::mri_settings(OpticalModel::kEmissionAbsorption, "gray");
+  HeadScene() {
+    auto c = Raycaster::create(test::gpu_context());
+    REQUIRE(c.is_ok());
+    caster = std::move(*c);
+    REQUIRE(caster->set_volume(volume).is_ok());
+    auto a = AnnotationRenderer::create(test::gpu_context());
+    REQUIRE(a.is_ok());
+    annotations = std::move(*a);
+  }
+};
+
 Camera test_camera() {
   Camera c;
   c.eye = {0.4, -2.2, 1.0};
@@ -139,14 +158,12 @@ TEST_CASE("annotations: golden image of imposter spheres and tangent cones") {
 
 TEST_CASE("annotations: markers in front of and behind volume features, composited with rays ending at them") {
   test::GpuTestScope scope;
-  const DenseVolume v = test::mri();
-  auto caster = Raycaster::create(test::gpu_context());
-  REQUIRE(caster.is_ok());
-  REQUIRE((*caster)->set_volume(v).is_ok());
-  const Camera cam = test::mri_camera(v);
-  const RenderSettings s = test::mri_settings(OpticalModel::kEmissionAbsorption, "gray");
-  auto renderer = AnnotationRenderer::create(test::gpu_context());
-  REQUIRE(renderer.is_ok());
+  const HeadScene head;
+  const DenseVolume& v = head.volume;
+  const auto& caster = head.caster;
+  const auto& renderer = head.annotations;
+  const Camera& cam = head.camera;
+  const RenderSettings& s = head.settings;
   const uint32_t w = 128, h = 128;
 
   // Two markers of the same size on the line from the eye through the volume
@@ -159,11 +176,11 @@ TEST_CASE("annotations: markers in front of and behind volume features, composit
   AnnotationScene scene;
   scene.spheres.push_back({along(-0.4, 0.35 * centre), radius, {1.0f, 0.2f, 0.2f, 1.0f}});   // in front
   scene.spheres.push_back({along(0.25, 1.0 * centre), radius, {1.0f, 0.2f, 0.2f, 1.0f}});     // inside the head
-  auto ann = (*renderer)->render(cam, scene, w, h);
+  auto ann = renderer->render(cam, scene, w, h);
   REQUIRE(ann.is_ok());
 
-  REQUIRE((*caster)->set_depth(ann->view_depth, w, h).is_ok());
-  auto vol = (*caster)->render_float(cam, s, w, h);
+  REQUIRE(caster->set_depth(ann->view_depth, w, h).is_ok());
+  auto vol = caster->render_float(cam, s, w, h);
   REQUIRE(vol.is_ok());
   const ImageRgba8 out = composite_volume_over(*vol, ann->color);
   // Pixel at each marker's centre: the front one shows its own red; the one
@@ -242,14 +259,12 @@ TEST_CASE("meshes: OBJ files read with polygons, negative indices, groups as a h
 
 TEST_CASE("meshes: a surface inside the volume stops the rays at it (golden)") {
   test::GpuTestScope scope;
-  const DenseVolume v = test::mri();
-  auto caster = Raycaster::create(test::gpu_context());
-  REQUIRE(caster.is_ok());
-  REQUIRE((*caster)->set_volume(v).is_ok());
-  const Camera cam = test::mri_camera(v);
-  const RenderSettings s = test::mri_settings(OpticalModel::kEmissionAbsorption, "gray");
-  auto renderer = AnnotationRenderer::create(test::gpu_context());
-  REQUIRE(renderer.is_ok());
+  const HeadScene head;
+  const DenseVolume& v = head.volume;
+  const auto& caster = head.caster;
+  const auto& renderer = head.annotations;
+  const Camera& cam = head.camera;
+  const RenderSettings& s = head.settings;
   const uint32_t w = 128, h = 128;
 
   auto ico = annotate::read_obj(std::string(VXR_TESTDATA_DIR) + "/obj/ico4.obj");
@@ -261,7 +276,7 @@ TEST_CASE("meshes: a surface inside the volume stops the rays at it (golden)") {
   const double radius = 0.12 * glm::length(placement.extent());
   AnnotationScene scene;
   scene.meshes.push_back(annotation_mesh(ico->mesh, -radius * c, radius));  // centred in the head
-  auto ann = (*renderer)->render(cam, scene, w, h);
+  auto ann = renderer->render(cam, scene, w, h);
   REQUIRE(ann.is_ok());
   // The centre pixel sees the sphere's near side: camera distance minus the
   // radius, to the mesh's flattening (subdivision 4: under 0.3% of the radius).
@@ -270,10 +285,10 @@ TEST_CASE("meshes: a surface inside the volume stops the rays at it (golden)") {
   CHECK(std::abs(ann->view_depth[mid] - expect) < 0.01 * radius);
   CHECK(!std::isfinite(ann->view_depth[0]));  // a corner sees no mesh
 
-  auto full = (*caster)->render_float(cam, s, w, h);
+  auto full = caster->render_float(cam, s, w, h);
   REQUIRE(full.is_ok());
-  REQUIRE((*caster)->set_depth(ann->view_depth, w, h).is_ok());
-  auto vol = (*caster)->render_float(cam, s, w, h);
+  REQUIRE(caster->set_depth(ann->view_depth, w, h).is_ok());
+  auto vol = caster->render_float(cam, s, w, h);
   REQUIRE(vol.is_ok());
   CHECK(vol->rgba[mid * 4 + 3] < full->rgba[mid * 4 + 3]);  // less tissue in front of the surface than through the head
   CHECK(vol->rgba[0] == full->rgba[0]);                     // where there is no mesh nothing changes
