@@ -134,8 +134,8 @@ int run(const Options& o) {
   doc["reference_step_voxels"] = o.reference_step;
   doc["rmse_goal"] = o.rmse_goal;
   Progress progress("bench peer", made->size() * (o.steps.size() * 2 + 1), false);
-  std::printf("%-18s %6s %10s %10s %8s %10s %10s %9s %s\n", "scene", "step", "on ms", "off ms", "off/on",
-              "on gpu ms", "off gpu ms", "rmse", "identical");
+  std::printf("%-18s %6s %10s %10s %8s %10s %10s %9s %9s %s\n", "scene", "step", "on ms", "off ms", "off/on",
+              "on gpu ms", "off gpu ms", "samples x", "rmse", "identical");
   for (const Scene& sc : *made) {
     BrickRendererOptions ro;
     ro.preload_if_fits = true;
@@ -176,10 +176,14 @@ int run(const Options& o) {
                                {"bricks_drawn", b->stats.lod.drawn}}},
                       {"speedup_wall", speedup},
                       {"speedup_gpu", a->gpu_ms > 0 ? b->gpu_ms / a->gpu_ms : 0.0},
+                      // Samples taken off / on: the skip's share of the work, steady under a loaded CPU.
+                      {"samples_ratio", a->stats.samples ? double(b->stats.samples) / double(a->stats.samples) : 0.0},
                       {"identical", identical},
                       {"rmse_vs_reference", err}});
-      std::printf("%-18s %6.3f %10.2f %10.2f %8.2f %10.2f %10.2f %9.3f %s\n", sc.name.c_str(), step, a->wall_ms,
-                  b->wall_ms, speedup, a->gpu_ms, b->gpu_ms, err, identical ? "yes" : "NO");
+      std::printf("%-18s %6.3f %10.2f %10.2f %8.2f %10.2f %10.2f %9.2f %9.3f %s\n", sc.name.c_str(), step, a->wall_ms,
+                  b->wall_ms, speedup, a->gpu_ms, b->gpu_ms,
+                  a->stats.samples ? double(b->stats.samples) / double(a->stats.samples) : 0.0, err,
+                  identical ? "yes" : "NO");
     }
     nlohmann::json at_goal = nullptr;
     if (front_step > 0.0)
