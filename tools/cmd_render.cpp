@@ -10,6 +10,11 @@
 // resolved choice (input, timepoint, channels, windows, camera, size,
 // renderer); --card STORE:ID starts from that Scene, so the same build draws
 // the same pixels again.
+//
+// Timing (out-of-core renderer): --frames N --json prints each frame's GPU ms
+// (timestamp queries), wall ms and samples, with --reference also the RMSE
+// against the CPU reference of the finest level; --no-skip marches empty
+// space too (the same image; for A/B timing).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
