@@ -35,6 +35,9 @@ struct BrickFrameSettings {
   LodSettings lod;
   uint64_t upload_budget_bytes = UINT64_MAX;  // per frame; at least one brick is uploaded
   BrickPassMode mode = BrickPassMode::kAuto;
+  // With lod.skip_empty, rays also jump the empty cells inside drawn bricks
+  // (BrickCells; same image). Off: brick-level skipping only (measurements).
+  bool skip_cells = true;
 };
 
 struct BrickFrameStats {
@@ -47,6 +50,7 @@ struct BrickFrameStats {
   uint32_t dispatches = 0;
   double traverse_ms = 0.0;      // CPU octree traversal
   double render_ms = 0.0;        // ray-cast submission, wall clock
+  double gpu_ms = 0.0;           // BrickRenderer::render: the frame's commands on the GPU (timestamps; 0: none)
 };
 
 // One axis of a ray grid denser at the centre (the lens warp, xr/lens_warp.h),
