@@ -67,7 +67,7 @@ struct BrickRendererOptions {
   BrickPoolOptions pool;
   uint32_t max_bricks = 16384;         // brick-table capacity per frame (all views together)
   uint32_t max_work_items = 1u << 20;  // multipass / tile-list entries per frame (all views together)
-  uint32_t max_views = 32;             // record_view calls per frame (eyes, mirrors)
+  uint32_t max_views = 32;             // record_view calls per frame (one per eye)
   // Streaming (vxr view): missing bricks are requested from this cache,
   // whose loader threads read and decode them; begin_frame copies in those
   // that have arrived. A frame never waits for I/O: until a brick arrives its
