@@ -196,6 +196,15 @@ bool segment(uint b, vec3 dir, out float t0, out float t1) {
   return t1 > t0;
 }
 
+// Lens warp, one axis: warped pixel coordinate q (n rays, `edge` per outer
+// band at `step` pixels each) -> coordinate in the full image; xr/lens_warp.h.
+float unwarp(float q, float edge, float n, float stride) {
+  const float centre = n - 2.0 * edge;
+  if (q < edge) return q * stride;
+  if (q < edge + centre) return edge * stride + (q - edge);
+  return edge * stride + centre + (q - edge - centre) * stride;
+}
+
 void main() {
   const uint flags = p.pass.z;
   const uint width = P.control.y, height = P.control.z;
@@ -211,6 +220,12 @@ void main() {
   if (pix.x >= width || pix.y >= height) return;
 
   vec2 ndc = (vec2(pix) + 0.5) / vec2(width, height) * 2.0 - 1.0;
+  if (p.warp.z > 1u) {
+    const vec2 n = vec2(width, height), e = vec2(p.warp.xy);
+    const float s = float(p.warp.z);
+    const vec2 full = n + 2.0 * e * (s - 1.0);
+    ndc = vec2(unwarp(float(pix.x) + 0.5, e.x, n.x, s), unwarp(float(pix.y) + 0.5, e.y, n.y, s)) / full * 2.0 - 1.0;
+  }
   vec3 dir = normalize(P.forward.xyz + ndc.x * P.right.xyz - ndc.y * P.up.xyz);
   g_dir = dir;
 

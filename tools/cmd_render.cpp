@@ -1,5 +1,7 @@
-// `vxr render INPUT -o out.png`: one picture of a volume, on the GPU (compute
-// or fragment path) or with the CPU reference renderer (--reference).
+// `vxr render INPUT -o out.png`: one picture of a volume through the one
+// renderer vxr view uses (open_volume_session's source, the out-of-core brick
+// renderer), for every input. For comparison: --renderer dense (the dense
+// GPU ray caster, compute or fragment path) and --reference (CPU reference).
 //
 // Settings come from --settings (a RenderSettings JSON, or a Scene JSON with
 // "render" and "camera"), then the flags override them. Without a window the
@@ -145,28 +147,23 @@ Result<std::string> read_text(const std::string& path) {
 
 using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 
-// The out-of-core path: a .vxc container, an OME-Zarr folder or a procedural source through the
-// brick renderer. Without --frame-budget-ms it renders until nothing is
-// missing (every wanted brick resident) and writes that frame; with it, it
+// The one renderer, for every input: open_volume_session's source (a .vxc
+// container or OME-Zarr folder read in place, a procedural source, or any
+// importable file with its pyramid built in memory) through the brick
+// renderer. Without --frame-budget-ms it renders until nothing is missing
+// (every wanted brick resident) and writes that frame; with it, it
 // renders --frames frames (default 30) letting the frame-budget controller set
 // the LOD bias, and writes the last.
 int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context& gpu, bool procedural, uint32_t width,
             uint32_t height, const CameraMaker& make_camera, Resolved* resolved) {
-  std::unique_ptr<ChunkSource> src;
-  if (procedural) {
-    auto p = open_procedural(o.input);
-    if (!p) return fail(p.status(), kExitUsage);
-    src = std::move(p).value();
-    if (!window_given) {  // `vxr bench lod`'s: above the background noise (0..6)
-      s.channels[0].window_lo = 8;
-      s.channels[0].window_hi = 200;
-      window_given = true;
-    }
-  } else {
-    auto r = open_chunk_source(o.input);
-    if (!r) return fail(r.status());
-    for (const std::string& w : r->warnings) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), w.c_str());
-    src = std::move(r->source);
+  auto session = open_volume_session(o.input, {});
+  if (!session) return fail(session.status(), procedural ? kExitUsage : kExitFailure);
+  for (const std::string& n : session->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
+  const std::shared_ptr<const ChunkSource> src = session->source;
+  if (procedural && !window_given) {  // `vxr bench lod`'s: above the background noise (0..6)
+    s.channels[0].window_lo = 8;
+    s.channels[0].window_hi = 200;
+    window_given = true;
   }
   const VolumeInfo& info = src->info();
   auto drawn = parse_channels(o.channel, info.channels);
@@ -447,17 +444,16 @@ int run(const Options& given) {
   if (Status st = validate_render_settings(s, static_cast<uint32_t>(std::max<size_t>(1, s.channels.size()))); !st)
     return fail(st, kExitUsage);
 
-  // Which renderer: the out-of-core brick renderer for containers and
-  // procedural sources (the product's path for them), the dense one otherwise.
+  // Which renderer: the out-of-core brick renderer (vxr view's) for every
+  // input; the dense one only when asked for (--renderer dense, the fragment
+  // path, the CPU reference), as a comparison.
   const bool procedural = starts_with(o.input, "procedural:");
-  const bool container = is_chunk_source_input(o.input);  // .vxc or OME-Zarr, read in place
   if (!o.renderer.empty() && o.renderer != "lod" && o.renderer != "dense")
     return fail(invalid_argument("--renderer: use lod or dense, not '" + o.renderer + "'"), kExitUsage);
   std::string renderer = o.renderer;
-  if (renderer.empty()) renderer = (procedural || container) && (!o.reference || o.json) ? "lod" : "dense";
-  if (renderer == "lod" && !procedural && !container)
-    return fail(invalid_argument("--renderer lod: '" + o.input + "' is not a .vxc container or OME-Zarr folder; "
-                                 "convert it with `vxr import` first, or use --renderer dense"),
+  if (renderer.empty()) renderer = (o.reference && !o.json) || (o.path_given && o.path == "fragment") ? "dense" : "lod";
+  if (renderer == "lod" && o.path_given && o.path == "fragment")
+    return fail(invalid_argument("--path fragment: the dense renderer's fragment path; add --renderer dense"),
                 kExitUsage);
   if (renderer == "dense" && procedural)
     return fail(invalid_argument("--renderer dense: a procedural source is drawn only by --renderer lod"), kExitUsage);
@@ -471,7 +467,7 @@ int run(const Options& given) {
     return fail(invalid_argument("--reference: the CPU reference draws a whole volume; use --renderer dense"), kExitUsage);
   if (renderer == "dense" && (o.lod_bias_given || o.frame_budget_ms != 0.0))
     return fail(invalid_argument(std::string(o.lod_bias_given ? "--lod-bias" : "--frame-budget-ms") +
-                                 ": only the out-of-core renderer has levels of detail; use --renderer lod with a .vxc"),
+                                 ": only the out-of-core renderer has levels of detail; drop --renderer dense"),
                 kExitUsage);
   if (o.frame_budget_ms < 0.0 || !std::isfinite(o.frame_budget_ms))
     return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
@@ -613,9 +609,10 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--step", o->step, "sample step in voxels");
   cmd->add_option("--channel", o->channel, "channels to draw, e.g. 2 or 0,2 (default: the first up to 4)");
   cmd->add_option("--timepoint", o->timepoint, "timepoint to draw (default 0; out-of-core renderer)");
-  cmd->add_option("--path", o->path, "compute (default) or fragment");
+  cmd->add_option("--path", o->path, "dense renderer: compute (default) or fragment (implies --renderer dense)");
   cmd->add_option("--renderer", o->renderer,
-                  "lod (out-of-core bricks; default for .vxc, OME-Zarr and procedural:vessels:SIDE) or dense (whole volume)");
+                  "lod (the out-of-core brick renderer vxr view uses; the default for every input) or dense (whole volume, "
+                  "a comparison)");
   cmd->add_option("--lod-bias", o->lod_bias, "lod: log2 of voxels per pixel accepted (+1 coarser, -1 finer; default 0)");
   cmd->add_option("--frame-budget-ms", o->frame_budget_ms,
                   "lod: render --frames frames, adjusting the LOD bias to hold this frame time");

@@ -41,11 +41,12 @@ struct BrickCastParams {
   uvec4 control;   // xy: output pixel of the ray at (0, 0) (a rectangle of the target); z: first brick, w: brick count (single pass)
   uvec4 pass;      // x: work-item base with VXR_BRICK_WORK_ITEMS, y: empty-space cells per brick axis (0: off), z: flags
   vec4 atlas_inv;  // xyz: 1 / atlas size in texels, w: empty-space cell size in voxels
+  uvec4 warp;      // lens warp (z > 1): x, y: rays across each outer band along x, y; z: pixels per ray there
 };
 
 #ifdef __cplusplus
 static_assert(sizeof(BrickRecord) == 96, "brick record layout");
-static_assert(sizeof(BrickCastParams) == 48, "push constants must stay within 128 bytes");
+static_assert(sizeof(BrickCastParams) == 64, "push constants must stay within 128 bytes");
 }  // namespace vxr::shader
 #endif
 

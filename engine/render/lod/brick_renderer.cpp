@@ -464,6 +464,10 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   const uint32_t cells_per_axis = cells ? pool_->cells().cells_per_axis : 0u;
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(pool_->cells().cell_size));
+  if (target.warp_x.active() || target.warp_y.active())
+    p.warp = glm::uvec4(target.warp_x.active() ? target.warp_x.edge_warped : 0u,
+                        target.warp_y.active() ? target.warp_y.edge_warped : 0u,
+                        std::max(target.warp_x.step, target.warp_y.step), 0u);
   uint32_t dispatches = 0;
 
   // The previous view's dispatches and blit used the same accumulation image.
@@ -553,10 +557,18 @@ glm::uvec4 screen_rect(const BrickBox& b, const LodView& v) {
   const double by = std::clamp(std::ceil(px(y1, v.height)) + 2, 0.0, double(v.height));
   return {uint32_t(ax), uint32_t(ay), uint32_t(bx - ax), uint32_t(by - ay)};
 }
+
+// The warped-grid pixels covering full-image rectangle r (identity without a warp).
+glm::uvec4 warp_rect(const glm::uvec4& r, const WarpAxis& ax, const WarpAxis& ay) {
+  const uint32_t x0 = uint32_t(std::floor(ax.to_warped(r.x))), y0 = uint32_t(std::floor(ay.to_warped(r.y)));
+  const uint32_t x1 = std::min(ax.warped(), uint32_t(std::ceil(ax.to_warped(double(r.x) + r.z))));
+  const uint32_t y1 = std::min(ay.warped(), uint32_t(std::ceil(ay.to_warped(double(r.y) + r.w))));
+  return {x0, y0, x1 > x0 ? x1 - x0 : 0u, y1 > y0 ? y1 - y0 : 0u};
+}
 }  // namespace
 
 Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<ChunkKey>& draw, const LodView& view,
-                                                           glm::uvec4* dst, size_t capacity, size_t* used) {
+                                                           const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used) {
   // Each brick becomes one work item per 8x8 tile holding a pixel whose ray
   // hits it. A brick goes into the wave after the last wave that wrote any of
   // its pixels, so within a wave no two items write the same pixel (the shader
@@ -565,13 +577,17 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
   // against the brick's box grown by 0.1%, conservative against float error):
   // per tile, bricks that merely touch on screen would chain into as many
   // waves as bricks.
-  const uint32_t w = view.width, h = view.height;
+  const uint32_t w = ax.warped(), h = ay.warped();
   const uint32_t tw = (w + 7) / 8, th = (h + 7) / 8;
-  if (ray_dirs_.size() != size_t(w) * h || rays_for_ != std::make_tuple(view.forward, view.right, view.up)) {
+  const glm::uvec4 grid(ax.full, ay.full, ax.edge_full, ay.edge_full);
+  if (ray_dirs_.size() != size_t(w) * h || rays_for_ != std::make_tuple(view.forward, view.right, view.up) ||
+      rays_grid_ != grid) {
     ray_dirs_.resize(size_t(w) * h);
+    rays_grid_ = grid;
     for (uint32_t y = 0; y < h; ++y)
       for (uint32_t x = 0; x < w; ++x) {
-        const double nx = (x + 0.5) / w * 2.0 - 1.0, ny = (y + 0.5) / h * 2.0 - 1.0;
+        const double nx = ax.from_warped(x + 0.5) / ax.full * 2.0 - 1.0;
+        const double ny = ay.from_warped(y + 0.5) / ay.full * 2.0 - 1.0;
         const glm::dvec3 d = glm::normalize(view.forward + nx * view.right - ny * view.up);
         ray_dirs_[size_t(y) * w + x] = 1.0 / d;  // inverse: the slab test divides
       }
@@ -586,7 +602,7 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
   uint32_t waves = 0;
   std::vector<uint32_t> hit_pixels;
   for (uint32_t b = 0; b < draw.size(); ++b) {
-    const glm::uvec4 r = screen_rect(chunk_box(src_, draw[b]), view);
+    const glm::uvec4 r = warp_rect(screen_rect(chunk_box(src_, draw[b]), view), ax, ay);
     if (r.z == 0 || r.w == 0) continue;
     BrickBox box = chunk_box(src_, draw[b]);
     const glm::dvec3 grow = 1e-3 * (box.hi - box.lo);
@@ -633,13 +649,13 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
   return out;
 }
 
-Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, glm::uvec4* dst,
-                                       size_t capacity, size_t* used) {
-  const uint32_t tw = (view.width + 7) / 8, th = (view.height + 7) / 8;
+Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, const WarpAxis& ax,
+                                       const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used) {
+  const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
   std::vector<std::vector<uint32_t>> lists(size_t(tw) * th);
   size_t total = lists.size();
   for (uint32_t b = 0; b < draw.size(); ++b) {
-    const glm::uvec4 r = screen_rect(chunk_box(src_, draw[b]), view);
+    const glm::uvec4 r = warp_rect(screen_rect(chunk_box(src_, draw[b]), view), ax, ay);
     if (r.z == 0 || r.w == 0) continue;
     for (uint32_t y = r.y / 8; y <= (r.y + r.w - 1) / 8; ++y)
       for (uint32_t x = r.x / 8; x <= (r.x + r.z - 1) / 8; ++x) lists[size_t(y) * tw + x].push_back(b);
@@ -717,7 +733,12 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   VXR_RETURN_IF_ERROR(record_transfer(cmd, tf));
   VXR_RETURN_IF_ERROR(ensure_accum(width, height));
   BrickFrameStats st;
-  const LodView view = view_for(camera, width, height);
+  // Lens warp: traversal, LOD and rays see the full image; the dispatch covers the warped grid.
+  const WarpAxis ax = target.warp_x.active() ? target.warp_x : identity_warp(width);
+  const WarpAxis ay = target.warp_y.active() ? target.warp_y : identity_warp(height);
+  if (ax.warped() != width || ay.warped() != height || (ax.active() && ay.active() && ax.step != ay.step))
+    return invalid_argument("render: the lens-warp grid does not match the view's rectangle");
+  const LodView view = view_for(camera, ax.full, ay.full);
 
   auto t0 = std::chrono::steady_clock::now();
   LodQueries q;
@@ -762,17 +783,19 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   size_t items_n = 0;
   std::vector<glm::uvec2> waves;
   if (mode == BrickPassMode::kMultipass) {
-    VXR_ASSIGN_OR_RETURN(waves, build_waves(lod.draw, view, items_dst, items_capacity, &items_n));
+    VXR_ASSIGN_OR_RETURN(waves, build_waves(lod.draw, view, ax, ay, items_dst, items_capacity, &items_n));
   } else if (mode == BrickPassMode::kTiled) {
-    VXR_RETURN_IF_ERROR(build_tile_lists(lod.draw, view, items_dst, items_capacity, &items_n));
+    VXR_RETURN_IF_ERROR(build_tile_lists(lod.draw, view, ax, ay, items_dst, items_capacity, &items_n));
   }
   const VkDeviceSize items_bytes = std::max<size_t>(items_n, 1) * sizeof(glm::uvec4);
   if (items_base + items_bytes > items_.size) return out_of_range("render: the frame's work list is full");
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;
   st.hit_rate = wanted ? double(lod.stats.drawn - lod.stats.fallback) / double(wanted) : 1.0;
 
-  const shader::RaycastParams params =
-      pack_params(plan_raycast(camera, s, placement(), value_scales_, width, height), false);
+  shader::RaycastParams params =
+      pack_params(plan_raycast(camera, s, placement(), value_scales_, ax.full, ay.full), false);
+  params.control.y = width;  // the rays dispatched (the warped grid's)
+  params.control.z = height;
   const VkDeviceSize params_offset = VkDeviceSize(views_) * params_stride_;
   std::memcpy(static_cast<uint8_t*>(params_.mapped) + params_offset, &params, sizeof(params));
 

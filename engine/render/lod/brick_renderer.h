@@ -67,7 +67,7 @@ struct BrickRendererOptions {
   BrickPoolOptions pool;
   uint32_t max_bricks = 16384;         // brick-table capacity per frame (all views together)
   uint32_t max_work_items = 1u << 20;  // multipass / tile-list entries per frame (all views together)
-  uint32_t max_views = 32;             // record_view calls per frame (eyes x lens-warp tiles)
+  uint32_t max_views = 32;             // record_view calls per frame (eyes, mirrors)
   // Streaming (vxr view): missing bricks are requested from this cache,
   // whose loader threads read and decode them; begin_frame copies in those
   // that have arrived. A frame never waits for I/O: until a brick arrives its
@@ -188,11 +188,12 @@ class BrickRenderer final : public VolumeRenderer {
                      uint32_t* dispatches);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
   // `dst` (capacity entries); returns (first item, count) per wave.
+  // `ax`, `ay`: the ray grid (identity_warp, or the lens warp's).
   Result<std::vector<glm::uvec2>> build_waves(const std::vector<ChunkKey>& draw, const LodView& view,
-                                              glm::uvec4* dst, size_t capacity, size_t* used);
+                                              const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
   // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen rectangle touches it.
-  Status build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, glm::uvec4* dst, size_t capacity,
-                          size_t* used);
+  Status build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, const WarpAxis& ax,
+                          const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
   gpu::Context& ctx_;
@@ -225,6 +226,7 @@ class BrickRenderer final : public VolumeRenderer {
   uint32_t apron_wanted_ = 0;        // a view needed a wider apron: the next begin_frame rebuilds the pool
   std::vector<glm::dvec3> ray_dirs_;  // per pixel 1/direction, for build_waves
   std::tuple<glm::dvec3, glm::dvec3, glm::dvec3> rays_for_;
+  glm::uvec4 rays_grid_{0};  // ray_dirs_'s grid: full sizes and warp bands
   std::vector<uint32_t> pixel_wave_;
   std::vector<double> value_scales_;  // per drawn channel: data units per texel unit
 };
