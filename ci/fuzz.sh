@@ -17,10 +17,10 @@ if [[ -z "${TMPDIR:-}" && -d /dev/shm ]]; then export TMPDIR=/dev/shm; fi
 export LSAN_OPTIONS="suppressions=$root/tests/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 seconds="${1:-60}"
 shift || true
-all=(tiff ims slices raw_sidecar container codec settings)
+all=(tiff ims slices raw_sidecar container codec settings obj)
 if [[ $# -eq 0 ]]; then names=("${all[@]}"); else names=("$@"); fi
 
-declare -A max_len=([tiff]=4096 [ims]=32768 [slices]=2048 [raw_sidecar]=512 [container]=8192 [codec]=1024 [settings]=2048)
+declare -A max_len=([tiff]=4096 [ims]=32768 [slices]=2048 [raw_sidecar]=512 [container]=8192 [codec]=1024 [settings]=2048 [obj]=4096)
 
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)

@@ -27,13 +27,17 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // One atlas per channel, all with the same slot layout (BrickPool); slots past
 // the volume's channel count are bound to channel 0's atlas and never read.
 layout(binding = 0) uniform sampler3D atlas_tex[VXR_MAX_CHANNELS];
-layout(binding = 1) uniform sampler2D transfer_tex;  // VXR_TF_SIZE x VXR_MAX_CHANNELS RGBA32F
+// VXR_TF_SIZE x (2 * VXR_MAX_CHANNELS) RGBA32F: rows 0..3 the transfer table
+// per channel, rows 4..7 in .r the count of entries 0..i with non-zero opacity.
+layout(binding = 1) uniform sampler2D transfer_tex;
 layout(binding = 2, rgba8) uniform writeonly image2D out_image;
 layout(binding = 3, rgba32f) uniform image2D accum_image;
 layout(std430, binding = 4) readonly buffer Bricks { BrickRecord bricks[]; };
 layout(std430, binding = 5) buffer Counters { uint samples_lo; uint samples_hi; };
 layout(std430, binding = 6) readonly buffer Items { uvec4 items[]; };  // x: brick, y/z: tile origin in pixels
 layout(std140, binding = 7) uniform Params { RaycastParams P; };
+// Per atlas slot and channel, (min, max) texel value of each empty-space cell (BrickPool cell ranges).
+layout(std430, binding = 8) readonly buffer Cells { vec2 cell_range[]; };
 
 layout(push_constant) uniform Push { BrickCastParams p; };
 
@@ -115,6 +119,61 @@ vec4 finish_ray(VxrRay r) {
   return vxr_finish(r, P, vec3(0.0), g_dir);
 }
 
+// Empty-space cells (p.pass.y cells per brick axis, p.atlas_inv.w voxels each;
+// 0 cells: off). A cell may be jumped only when no sample in it can change
+// the ray: the shader keeps the samples' grid, so the image is bit-identical
+// with skipping off. The stored ranges cover every voxel a sample within half
+// a voxel of the cell filters, so rounding in a sample's position or in the
+// jump's exit is absorbed.
+float opaque_entries_upto(int c, int i) { return texelFetch(transfer_tex, ivec2(i, VXR_MAX_CHANNELS + c), 0).r; }
+
+bool cell_is_empty(uint slot, int cell, VxrRay r) {
+  const uint m = VXR_SC_MODEL;
+  const uint count = p.pass.y * p.pass.y * p.pass.y;
+  for (int c = 0; c < VXR_SC_CHANNELS; ++c) {
+    if (P.window[c].w == 0.0) continue;
+    const vec2 range = cell_range[(slot * uint(VXR_SC_CHANNELS) + uint(c)) * count + uint(cell)];
+    // Windowing (and gamma) is monotonic: the range's ends bound every sample's value.
+    const float x0 = vxr_normalise(P, vec4(range.x))[c], x1 = vxr_normalise(P, vec4(range.y))[c];
+    // MIP / MinIP: a gamma's pow may not be monotonic in the last ulp, so
+    // inside the window a bound must clear the running value by a margin;
+    // outside it (0 or 1 exactly) it is exact.
+    if (m == VXR_MODEL_MIP) {
+      // Not above the running maximum: the maximum stays. Nothing taken yet: entry 0 must be clear.
+      const float margin = VXR_SC_GAMMA && x1 > 0.0 ? 1e-5 : 0.0;
+      if (!(x1 + margin <= r.reduce[c]) || (r.count == 0.0 && opaque_entries_upto(c, 0) > 0.0)) return false;
+    } else if (m == VXR_MODEL_MINIP) {
+      const float margin = VXR_SC_GAMMA && x0 < 1.0 ? 1e-5 : 0.0;
+      if (!(x0 - margin >= r.reduce[c]) ||
+          (r.count == 0.0 && opaque_entries_upto(c, VXR_TF_SIZE - 1) - opaque_entries_upto(c, VXR_TF_SIZE - 2) > 0.0))
+        return false;
+    } else {
+      // Every table entry the lookup can mix has zero opacity: a value at u = x * 255
+      // mixes entries floor(u) and, with a non-zero weight, floor(u) + 1, so the
+      // range's entries are floor(u0) .. ceil(u1) (x = 0 or 1 exactly, outside the
+      // window, reaches one entry). The stored range is wider than any sample's
+      // by far more than rounding; gamma's pow may not be monotonic in the last
+      // ulp: one entry more each side.
+      const float u0 = x0 * float(VXR_TF_SIZE - 1), u1 = x1 * float(VXR_TF_SIZE - 1);
+      const int pad = VXR_SC_GAMMA ? 1 : 0;
+      const int i0 = clamp(int(floor(u0)) - pad, 0, VXR_TF_SIZE - 1);
+      const int i1 = clamp(int(ceil(u1)) + pad, 0, VXR_TF_SIZE - 1);
+      if (opaque_entries_upto(c, i1) - (i0 > 0 ? opaque_entries_upto(c, i0 - 1) : 0.0) > 0.0) return false;
+    }
+  }
+  return true;
+}
+
+// Where the ray leaves cell `cell` grown by `grow` voxels, in t units.
+float cell_exit(ivec3 cell, vec3 e, vec3 dl, float grow) {
+  const float s = p.atlas_inv.w;
+  const vec3 lo = vec3(cell) * s - grow, hi = vec3(cell + 1) * s + grow;
+  // The ray is inside the box: a zero direction component gives +-inf, never 0 * inf.
+  const vec3 inv = 1.0 / dl;
+  const vec3 tmax = max((lo - e) * inv, (hi - e) * inv);
+  return min(min(tmax.x, tmax.y), tmax.z);
+}
+
 // The ray's segment [t0, t1) inside brick b (its clip box and cut plane), in
 // t units (level-0 voxels along dir). False when it misses.
 bool segment(uint b, vec3 dir, out float t0, out float t1) {
@@ -137,6 +196,15 @@ bool segment(uint b, vec3 dir, out float t0, out float t1) {
   return t1 > t0;
 }
 
+// Lens warp, one axis: warped pixel coordinate q (n rays, `edge` per outer
+// band at `step` pixels each) -> coordinate in the full image; xr/lens_warp.h.
+float unwarp(float q, float edge, float n, float stride) {
+  const float centre = n - 2.0 * edge;
+  if (q < edge) return q * stride;
+  if (q < edge + centre) return edge * stride + (q - edge);
+  return edge * stride + centre + (q - edge - centre) * stride;
+}
+
 void main() {
   const uint flags = p.pass.z;
   const uint width = P.control.y, height = P.control.z;
@@ -152,6 +220,12 @@ void main() {
   if (pix.x >= width || pix.y >= height) return;
 
   vec2 ndc = (vec2(pix) + 0.5) / vec2(width, height) * 2.0 - 1.0;
+  if (p.warp.z > 1u) {
+    const vec2 n = vec2(width, height), e = vec2(p.warp.xy);
+    const float s = float(p.warp.z);
+    const vec2 full = n + 2.0 * e * (s - 1.0);
+    ndc = vec2(unwarp(float(pix.x) + 0.5, e.x, n.x, s), unwarp(float(pix.y) + 0.5, e.y, n.y, s)) / full * 2.0 - 1.0;
+  }
   vec3 dir = normalize(P.forward.xyz + ndc.x * P.right.xyz - ndc.y * P.up.xyz);
   g_dir = dir;
 
@@ -179,9 +253,26 @@ void main() {
     const float dt = P.march.x / length(dl);  // one local step, in t units
     const float i0 = ceil(t0 / dt - 0.5);
     const int n = int(ceil(t1 / dt - 0.5) - i0);
+    // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture).
+    const bool cells = p.pass.y != 0u && bricks[b].atlas.w >= 0.0;
+    const uint slot = cells ? uint(bricks[b].atlas.w) : 0u;
+    // Samples before this t lie in a cell found occupied: marched without a test.
+    float occupied_until = -1.0;
     for (int k = 0; k < n && !ray.done; ++k) {
       // From the index: no drift. The segment is dt level-0 voxels long.
       const float t = (i0 + float(k) + 0.5) * dt;
+      if (cells && t >= occupied_until) {
+        const ivec3 c3 = clamp(ivec3(floor((e + t * dl) / p.atlas_inv.w)), ivec3(0), ivec3(int(p.pass.y) - 1));
+        const int cell = (c3.z * int(p.pass.y) + c3.y) * int(p.pass.y) + c3.x;
+        if (cell_is_empty(slot, cell, ray)) {
+          // The first sample at or past the exit of the cell grown by a quarter
+          // voxel; the ones before it lie within the half voxel its range covers.
+          const int next = int(ceil(cell_exit(c3, e, dl, 0.25) / dt - 0.5 - i0));
+          k = max(k, next - 1);
+          continue;
+        }
+        occupied_until = cell_exit(c3, e, dl, 0.0);  // taking samples is always right: no margin needed
+      }
       vxr_step(ray, P, e, dl, t, dt);
       ++taken;
       // The crossing's normal needs its brick's voxels: shade it now.

@@ -69,7 +69,7 @@ file(READ ${DIR}/tracks.csv csv)
 if(NOT csv STREQUAL "track,name,step,marker,timepoint,x,y,z,step_length_um\n1,cellA,0,1,0,1,2,3,\n1,cellA,1,2,1,4,5,6,6.363961030678928\n")
   message(FATAL_ERROR "tracks.csv:\n${csv}")
 endif()
-step(0 "3 markers, 1 measurements, 1 skeletons, 1 tracks, 1 ROIs, 0 cards\n.*skeleton 1 Neuron_missing_ids.swc: 8 nodes, 2 roots"
+step(0 "3 markers, 1 measurements, 1 skeletons, 1 tracks, 1 ROIs, 0 cards, 0 meshes\n.*skeleton 1 Neuron_missing_ids.swc: 8 nodes, 2 roots"
      "^$" annotate list ${S})
 
 step(0 "^card 1\n$" "^$" cards add ${S} --title "Spine cluster" --note "Dense spines near the soma"
@@ -105,3 +105,8 @@ step(0 "event 1: marker 1 \\(nucleus\\) at \\(10, 10, 1\\)\n.*event 6: measureme
 step(0 "2 markers, 1 measurements, 1 skeletons" "^$" annotate list ${T})
 file(WRITE ${DIR}/bad_tools.json [=[{"events": [{"tool": "count"}, {"prss": [1, 2, 3]}]}]=])
 step(2 "^$" "bad_tools.json: event 1: unknown key \"prss\"" annotate play ${T} ${DIR}/bad_tools.json)
+
+# A segmented surface imported as meshes, one per OBJ part.
+step(0 "^mesh 1 'Icosphere_Icosphere.001': 1280 triangles\n$" "^$" annotate import-obj ${T} ${TESTDATA}/obj/ico4.obj --opacity 0.5)
+step(0 "1 meshes\n.*mesh 1 Icosphere_Icosphere.001: 1280 triangles\n" "^$" annotate list ${T})
+step(2 "^$" "missing.obj: no such file" annotate import-obj ${T} ${DIR}/missing.obj)

@@ -23,6 +23,7 @@
 #include "annotate/annotation_store.h"
 #include "annotate/csv_export.h"
 #include "annotate/file_io.h"
+#include "annotate/obj.h"
 #include "annotate/swc.h"
 #include "scene/render_settings.h"
 
@@ -763,4 +764,65 @@ TEST_CASE("store: killed with SIGKILL at 60 random moments, every acknowledged w
   MESSAGE(acked.size() << " acknowledged writes over 60 kills, " << kills_mid_write
                        << " kills after at least one write");
   CHECK(kills_mid_write >= 40);
+}
+
+TEST_CASE("store: meshes keep the OBJ hierarchy and geometry, delete cascades, damaged geometry is reported") {
+  const std::string dir = fresh_dir("meshes");
+  auto store = AnnotationStore::open(dir, true);
+  REQUIRE(store.is_ok());
+  auto obj = parse_obj("o tissue\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\ng cell_a\nf 1 2 3\ng cell_b\nf 1 2 4\nf 1 3 4\n",
+                       "t.obj", "");
+  REQUIRE(obj.is_ok());
+  auto ids = (*store)->add_meshes(obj->mesh, 0.5);
+  REQUIRE_MESSAGE(ids.is_ok(), ids.status().to_string());
+  REQUIRE(ids->size() == 3);
+  auto all = (*store)->meshes();
+  REQUIRE(all.is_ok());
+  REQUIRE(all->size() == 3);
+  CHECK((*all)[0].name == "tissue");
+  CHECK((*all)[0].parent == 0);
+  CHECK((*all)[1].parent == (*ids)[0]);
+  CHECK((*all)[2].parent == (*ids)[0]);
+  CHECK((*all)[2].triangles == 2);
+  CHECK((*all)[2].vertices == 4);
+  CHECK((*all)[2].color[3] == 0.5);
+  // Geometry comes back exactly (doubles), renumbered per part.
+  auto b = (*store)->mesh_geometry((*ids)[2]);
+  REQUIRE(b.is_ok());
+  REQUIRE(b->triangles.size() == 2);
+  for (size_t t = 0; t < 2; ++t)
+    for (int k = 0; k < 3; ++k)
+      CHECK(b->positions[b->triangles[t][k]] == obj->mesh.positions[obj->mesh.triangles[1 + t][k]]);
+  // The real OBJ file round-trips too.
+  auto ico = read_obj(kTestdata + "/obj/ico4.obj");
+  REQUIRE(ico.is_ok());
+  auto ico_ids = (*store)->add_meshes(ico->mesh);
+  REQUIRE(ico_ids.is_ok());
+  auto back = (*store)->mesh_geometry(ico_ids->front());
+  REQUIRE(back.is_ok());
+  CHECK(back->positions.size() == ico->mesh.positions.size());
+  REQUIRE(back->triangles.size() == ico->mesh.triangles.size());
+  bool same = true;
+  for (size_t t = 0; t < back->triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      same = same && back->positions[back->triangles[t][k]] == ico->mesh.positions[ico->mesh.triangles[t][k]];
+  CHECK(same);
+  // Deleting the tissue removes its cells in the same batch.
+  REQUIRE((*store)->delete_mesh((*ids)[0]));
+  CHECK((*store)->meshes()->size() == 1);
+  CHECK((*store)->mesh_geometry((*ids)[1]).status().code() == ErrorCode::kNotFound);
+  store->reset();
+  {  // Damage one geometry value behind the store's back.
+    leveldb::DB* db = nullptr;
+    REQUIRE(leveldb::DB::Open(leveldb::Options(), dir, &db).ok());
+    char key[32];
+    std::snprintf(key, sizeof key, "meshdata/%016llx", (unsigned long long)ico_ids->front());
+    REQUIRE(db->Put(leveldb::WriteOptions(), key, std::string(20, 'x')).ok());
+    delete db;
+  }
+  auto reopened = AnnotationStore::open(dir, false);
+  REQUIRE(reopened.is_ok());
+  const Status damaged = (*reopened)->mesh_geometry(ico_ids->front()).status();
+  CHECK(damaged.code() == ErrorCode::kCorrupt);
+  CHECK(damaged.message().find("meshdata/") != std::string::npos);
 }

@@ -10,6 +10,7 @@
 
 #include "golden.h"
 #include "gpu_fixture.h"
+#include "annotate/obj.h"
 #include "render/annotation_renderer.h"
 #include "render/raycaster.h"
 #include "render_scenes.h"
@@ -76,6 +77,25 @@ AnnotationScene test_scene() {
   return s;
 }
 
+// The MRI head (gray EA) with a dense ray caster and an annotation renderer:
+// the scene markers and meshes are composited into.
+struct HeadScene {
+  DenseVolume volume = test::mri();
+  std::unique_ptr<Raycaster> caster;
+  std::unique_ptr<AnnotationRenderer> annotations;
+  Camera camera = test::mri_camera(volume);
+  RenderSettings settings = test::mri_settings(OpticalModel::kEmissionAbsorption, "gray");
+  HeadScene() {
+    auto c = Raycaster::create(test::gpu_context());
+    REQUIRE(c.is_ok());
+    caster = std::move(*c);
+    REQUIRE(caster->set_volume(volume).is_ok());
+    auto a = AnnotationRenderer::create(test::gpu_context());
+    REQUIRE(a.is_ok());
+    annotations = std::move(*a);
+  }
+};
+
 Camera test_camera() {
   Camera c;
   c.eye = {0.4, -2.2, 1.0};
@@ -138,14 +158,12 @@ TEST_CASE("annotations: golden image of imposter spheres and tangent cones") {
 
 TEST_CASE("annotations: markers in front of and behind volume features, composited with rays ending at them") {
   test::GpuTestScope scope;
-  const DenseVolume v = test::mri();
-  auto caster = Raycaster::create(test::gpu_context());
-  REQUIRE(caster.is_ok());
-  REQUIRE((*caster)->set_volume(v).is_ok());
-  const Camera cam = test::mri_camera(v);
-  const RenderSettings s = test::mri_settings(OpticalModel::kEmissionAbsorption, "gray");
-  auto renderer = AnnotationRenderer::create(test::gpu_context());
-  REQUIRE(renderer.is_ok());
+  const HeadScene head;
+  const DenseVolume& v = head.volume;
+  const auto& caster = head.caster;
+  const auto& renderer = head.annotations;
+  const Camera& cam = head.camera;
+  const RenderSettings& s = head.settings;
   const uint32_t w = 128, h = 128;
 
   // Two markers of the same size on the line from the eye through the volume
@@ -158,11 +176,11 @@ TEST_CASE("annotations: markers in front of and behind volume features, composit
   AnnotationScene scene;
   scene.spheres.push_back({along(-0.4, 0.35 * centre), radius, {1.0f, 0.2f, 0.2f, 1.0f}});   // in front
   scene.spheres.push_back({along(0.25, 1.0 * centre), radius, {1.0f, 0.2f, 0.2f, 1.0f}});     // inside the head
-  auto ann = (*renderer)->render(cam, scene, w, h);
+  auto ann = renderer->render(cam, scene, w, h);
   REQUIRE(ann.is_ok());
 
-  REQUIRE((*caster)->set_depth(ann->view_depth, w, h).is_ok());
-  auto vol = (*caster)->render_float(cam, s, w, h);
+  REQUIRE(caster->set_depth(ann->view_depth, w, h).is_ok());
+  auto vol = caster->render_float(cam, s, w, h);
   REQUIRE(vol.is_ok());
   const ImageRgba8 out = composite_volume_over(*vol, ann->color);
   // Pixel at each marker's centre: the front one shows its own red; the one
@@ -188,5 +206,95 @@ TEST_CASE("annotations: markers in front of and behind volume features, composit
                               "two red marker spheres on the MRI head (gray EA): the left one between the eye and the "
                               "head, shown whole; the right one inside the head at the centre's depth, seen through "
                               "the tissue in front of it (volume rays end at the markers' depth, volume composited over)");
+  CHECK_MESSAGE(g.passed, g.message);
+}
+
+TEST_CASE("meshes: OBJ files read with polygons, negative indices, groups as a hierarchy and line-numbered errors") {
+  const std::string data = VXR_TESTDATA_DIR;
+  auto ico = annotate::read_obj(data + "/obj/ico4.obj");
+  REQUIRE_MESSAGE(ico.is_ok(), ico.status().to_string());
+  CHECK(ico->mesh.positions.size() == 642);
+  CHECK(ico->mesh.triangles.size() == 1280);
+  REQUIRE(ico->mesh.parts.size() == 1);
+  CHECK(ico->mesh.parts[0].name == "Icosphere_Icosphere.001");
+  CHECK(ico->mesh.parts[0].triangle_count == 1280);
+  REQUIRE(ico->mesh.materials.size() == 2);  // the default grey, then the file's
+  CHECK(ico->mesh.materials[1].name == "None");
+  CHECK(ico->mesh.materials[1].color[0] == doctest::Approx(0.8f));
+  CHECK(ico->warnings.empty());
+  // A unit sphere: every vertex one unit from the centroid.
+  glm::dvec3 c(0.0);
+  for (const auto& p : ico->mesh.positions) c += glm::dvec3(p[0], p[1], p[2]);
+  c /= double(ico->mesh.positions.size());
+  for (const auto& p : ico->mesh.positions) CHECK(glm::length(glm::dvec3(p[0], p[1], p[2]) - c) == doctest::Approx(1.0).epsilon(1e-4));
+
+  auto cube = annotate::read_obj(data + "/obj/negative_indices.obj");
+  REQUIRE_MESSAGE(cube.is_ok(), cube.status().to_string());
+  CHECK(cube->mesh.positions.size() == 8);
+  CHECK(cube->mesh.triangles.size() == 12);  // six quads, two triangles each
+  for (const auto& t : cube->mesh.triangles)
+    for (uint32_t v : t) CHECK(v < 8);
+
+  auto tree = annotate::parse_obj("o tissue\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\ng cell_a\nf 1 2 3\ng cell_b\nf 1 2 4\n"
+                                  "f 1 3 4\no tissue2\nf -4 -3 -1\nfoo bar\nfoo again\n",
+                                  "t.obj", "");
+  REQUIRE(tree.is_ok());
+  const auto& parts = tree->mesh.parts;
+  REQUIRE(parts.size() == 4);
+  CHECK(parts[0].name == "tissue");
+  CHECK(parts[0].triangle_count == 0);
+  CHECK((parts[1].name == "cell_a" && parts[1].parent == 0 && parts[1].triangle_count == 1));
+  CHECK((parts[2].name == "cell_b" && parts[2].parent == 0 && parts[2].triangle_count == 2));
+  CHECK((parts[3].name == "tissue2" && parts[3].parent == -1 && parts[3].triangle_count == 1));
+  REQUIRE(tree->warnings.size() == 1);  // one warning per unknown keyword
+  CHECK(tree->warnings[0] == "t.obj:13: unknown keyword 'foo'; lines with it are skipped");
+
+  CHECK(annotate::parse_obj("v 0 0 0\nv 1 0 0\nf 1 2 9\n", "bad.obj", "").status().message() ==
+        "bad.obj:3: face vertex 9 is outside the 2 vertices read so far");
+  CHECK(annotate::parse_obj("v 0 nan 0\n", "bad.obj", "").status().message() ==
+        "bad.obj:1: vertex coordinate 'nan' is not a finite number");
+  CHECK(annotate::parse_obj("v 0 0 0\n", "empty.obj", "").status().message() == "empty.obj: has no faces to draw");
+  CHECK(annotate::read_obj("/nonexistent/x.obj").status().code() == ErrorCode::kNotFound);
+}
+
+TEST_CASE("meshes: a surface inside the volume stops the rays at it (golden)") {
+  test::GpuTestScope scope;
+  const HeadScene head;
+  const DenseVolume& v = head.volume;
+  const auto& caster = head.caster;
+  const auto& renderer = head.annotations;
+  const Camera& cam = head.camera;
+  const RenderSettings& s = head.settings;
+  const uint32_t w = 128, h = 128;
+
+  auto ico = annotate::read_obj(std::string(VXR_TESTDATA_DIR) + "/obj/ico4.obj");
+  REQUIRE(ico.is_ok());
+  glm::dvec3 c(0.0);
+  for (const auto& p : ico->mesh.positions) c += glm::dvec3(p[0], p[1], p[2]);
+  c /= double(ico->mesh.positions.size());
+  const VolumePlacement placement{v.dims, v.voxel_size};
+  const double radius = 0.12 * glm::length(placement.extent());
+  AnnotationScene scene;
+  scene.meshes.push_back(annotation_mesh(ico->mesh, -radius * c, radius));  // centred in the head
+  auto ann = renderer->render(cam, scene, w, h);
+  REQUIRE(ann.is_ok());
+  // The centre pixel sees the sphere's near side: camera distance minus the
+  // radius, to the mesh's flattening (subdivision 4: under 0.3% of the radius).
+  const size_t mid = size_t(h / 2) * w + w / 2;
+  const double expect = glm::length(cam.eye - cam.target) - radius;
+  CHECK(std::abs(ann->view_depth[mid] - expect) < 0.01 * radius);
+  CHECK(!std::isfinite(ann->view_depth[0]));  // a corner sees no mesh
+
+  auto full = caster->render_float(cam, s, w, h);
+  REQUIRE(full.is_ok());
+  REQUIRE(caster->set_depth(ann->view_depth, w, h).is_ok());
+  auto vol = caster->render_float(cam, s, w, h);
+  REQUIRE(vol.is_ok());
+  CHECK(vol->rgba[mid * 4 + 3] < full->rgba[mid * 4 + 3]);  // less tissue in front of the surface than through the head
+  CHECK(vol->rgba[0] == full->rgba[0]);                     // where there is no mesh nothing changes
+  const ImageRgba8 out = composite_volume_over(*vol, ann->color);
+  auto g = test::check_golden("annotation_mesh_in_volume", over_black(out), test::gpu_context().info().fingerprint(), 3,
+                              "the ico4.obj sphere (grey, flat-shaded) centred in the MRI head (gray EA): volume rays "
+                              "end at its surface, the tissue in front of it is composited over");
   CHECK_MESSAGE(g.passed, g.message);
 }

@@ -19,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "cli_runner.h"
 #include "volume/container_reader.h"
 #include "volume/importers/import_source.h"
 #include "volume/load_dense.h"
@@ -781,6 +782,34 @@ TEST_CASE("zarr: a 3-level multiscale (anisotropic first step) gives levels with
     check_chunks(*cs, 2, l2);
     check_slab(dir, l0);  // import reads level 0
   }
+}
+
+TEST_CASE("zarr: the translation is the volume's origin, read in place, imported into the .vxc and shown by info") {
+  const Volume l0 = make_volume({4, 6, 8}, DType::kU8, 1);
+  const fs::path dir = scratch("translation");
+  // z y x order in the file; x y z in VolumeInfo. Millimetres: converted like the voxel size.
+  write_ome(dir, 2, {"z", "y", "x"}, "millimeter", {{"0", {2.0, 0.5, 0.25}, {10.0, 20.5, -3.0}}});
+  ArraySpec s;
+  s.zarr_format = 2;
+  s.chunks = {4, 6, 8};
+  write_array(dir / "0", l0, s);
+  auto cs = open_cs(dir, 8);
+  CHECK(cs->info().unit == "mm");
+  CHECK(cs->info().origin == std::array<double, 3>{-3.0, 20.5, 10.0});
+  auto slab = open_import_source({dir.string()});
+  REQUIRE(slab.is_ok());
+  CHECK((*slab)->info().origin == std::array<double, 3>{-3.0, 20.5, 10.0});
+  // Through `vxr import` into the container header, and back out of `vxr info`.
+  const fs::path vxc = dir.parent_path() / "translation.vxc";
+  const vxr::test::CliRun imp = vxr::test::run_vxr("import " + dir.string() + " -o " + vxc.string(), dir.parent_path());
+  REQUIRE_MESSAGE(imp.rc == 0, imp.err);
+  auto reader = ContainerReader::open(vxc.string());
+  REQUIRE(reader.is_ok());
+  CHECK((*reader)->info().origin == std::array<double, 3>{-3.0, 20.5, 10.0});
+  const vxr::test::CliRun info = vxr::test::run_vxr("info " + vxc.string(), dir.parent_path());
+  CHECK(info.out.find("origin:      -3, 20.5, 10 mm\n") != std::string::npos);
+  const vxr::test::CliRun j = vxr::test::run_vxr("info --json " + vxc.string(), dir.parent_path());
+  CHECK(json::parse(j.out).at("origin") == json::array({-3.0, 20.5, 10.0}));
 }
 
 TEST_CASE("zarr: a level that is not a 2x step ends the chunk source's pyramid, with a warning naming it") {

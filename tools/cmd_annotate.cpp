@@ -15,6 +15,7 @@
 #include "core/output_file.h"
 #include "annotate/csv_export.h"
 #include "annotate/file_io.h"
+#include "annotate/obj.h"
 #include "annotate/swc.h"
 #include "annotate/tool_script.h"
 #include "command.h"
@@ -183,13 +184,19 @@ void add_annotate_command(CLI::App& app, Invocation& inv) {
       auto tracks = s.tracks();
       auto rois = s.rois();
       auto cards = s.cards();
-      for (const Status* st :
-           {&markers.status(), &measures.status(), &sks.status(), &tracks.status(), &rois.status(), &cards.status()})
+      auto meshes = s.meshes();
+      for (const Status* st : {&markers.status(), &measures.status(), &sks.status(), &tracks.status(), &rois.status(),
+                               &cards.status(), &meshes.status()})
         if (!st->is_ok()) return fail(*st);
       const VoxelSpace& vs = s.voxel_space();
       std::printf("voxel size %s %s\n", fmt3(vs.voxel_size).c_str(), vs.unit.c_str());
-      std::printf("%zu markers, %zu measurements, %zu skeletons, %zu tracks, %zu ROIs, %zu cards\n", markers->size(),
-                  measures->size(), sks->size(), tracks->size(), rois->size(), cards->size());
+      std::printf("%zu markers, %zu measurements, %zu skeletons, %zu tracks, %zu ROIs, %zu cards, %zu meshes\n",
+                  markers->size(), measures->size(), sks->size(), tracks->size(), rois->size(), cards->size(),
+                  meshes->size());
+      for (const StoredMesh& m : *meshes)
+        std::printf("mesh %llu %s: %llu triangles%s\n", (unsigned long long)m.id, m.name.c_str(),
+                    (unsigned long long)m.triangles,
+                    m.parent ? (", below mesh " + std::to_string(m.parent)).c_str() : "");
       for (const Measurement& m : *measures)
         std::printf("measurement %llu %s: %s %s\n", (unsigned long long)m.id, m.label.c_str(), fmt(s.length(m)).c_str(),
                     vs.unit.c_str());
@@ -390,6 +397,35 @@ void add_annotate_command(CLI::App& app, Invocation& inv) {
         });
     cmd->add_option("file", *file, "SWC file")->required();
     cmd->add_option("--name", *name, "skeleton name (default: the file name)");
+  }
+  {
+    auto store = std::make_shared<std::string>();
+    auto file = std::make_shared<std::string>();
+    auto alpha = std::make_shared<double>(1.0);
+    auto voxels = std::make_shared<bool>(false);
+    auto* cmd = store_command(
+        *top, inv, "import-obj",
+        "read a Wavefront OBJ surface (in the store's length unit) as meshes, one per o/g part; warnings go to stderr",
+        store, [file, alpha, voxels](AnnotationStore& s) {
+          auto obj = read_obj(*file);
+          if (!obj.is_ok()) return fail_status(obj.status());
+          for (const std::string& w : obj->warnings) std::fprintf(stderr, "vxr: warning: %s\n", w.c_str());
+          Mesh mesh = std::move(obj->mesh);
+          if (!*voxels)
+            for (Vec3& p : mesh.positions) p = s.voxel_space().from_physical(p);
+          auto ids = s.add_meshes(mesh, *alpha);
+          if (!ids.is_ok()) return fail_status(ids.status());
+          for (size_t i = 0; i < ids->size(); ++i) {
+            const MeshPart& part = mesh.parts[i];
+            std::printf("mesh %llu '%s'%s: %u triangles\n", (unsigned long long)(*ids)[i], part.name.c_str(),
+                        part.parent < 0 ? "" : (" below mesh " + std::to_string((*ids)[size_t(part.parent)])).c_str(),
+                        part.triangle_count);
+          }
+          return kExitOk;
+        });
+    cmd->add_option("file", *file, "OBJ file")->required();
+    cmd->add_option("--opacity", *alpha, "opacity of the surfaces, 0..1 (default 1)")->check(CLI::Range(0.0, 1.0));
+    cmd->add_flag("--voxels", *voxels, "the OBJ is in voxel coordinates, not the store's length unit");
   }
   {
     // The tracing tool's edits, one per call, each atomic and tree-preserving.

@@ -11,6 +11,7 @@ void add_bench_command(CLI::App& app, Invocation& inv) {
   bench::add_roofline_bench(*bench, inv);
   bench::add_xr_bench(*bench, inv);
   bench::add_lod_bench(*bench, inv);
+  bench::add_peer_bench(*bench, inv);
   bench::add_import_bench(*bench, inv);
   bench::add_synth_tiff_bench(*bench, inv);
   bench::add_stability_bench(*bench, inv);

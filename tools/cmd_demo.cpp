@@ -1,13 +1,14 @@
-// `vxr demo`: renders the bundled sample volume to DIR/demo.png.
+// `vxr demo`: renders the bundled sample volume to DIR/demo.png through the
+// one renderer (open_volume_session's source, the brick renderer).
 #include <cstdio>
 #include <algorithm>
 #include <filesystem>
 #include <vector>
 
-#include "assets/assets.h"
 #include "command.h"
 #include "core/trace.h"
-#include "render/raycaster.h"
+#include "render/lod/brick_renderer.h"
+#include "render/volume_session.h"
 
 namespace vxr::cli {
 
@@ -18,17 +19,18 @@ void add_demo_command(CLI::App& app, Invocation& inv) {
   cmd->callback([&inv, out_dir] {
     inv.run = [out_dir] {
       VXR_TRACE_SCOPE("demo");
-      auto volume = assets::sample_volume();
-      if (!volume) return fail(volume.status());
+      auto session = open_volume_session("", {});
+      if (!session) return fail(session.status());
       auto gpu = open_gpu();
       if (!gpu) return fail(gpu.status());
-      auto caster = Raycaster::create(**gpu);
+      BrickRendererOptions ro;
+      ro.preload_if_fits = true;  // the whole sample at full detail from the first frame
+      auto caster = BrickRenderer::create(**gpu, *session->source, ro);
       if (!caster) return fail(caster.status());
-      if (Status s = (*caster)->set_volume(*volume); !s) return fail(s);
 
       // Four views of the head, 256x256 each, in one 512x512 picture: emission-absorption
       // (hot), MIP (viridis), the shaded skin isosurface, and colour by depth (turbo).
-      const VolumePlacement placement{volume->dims, volume->voxel_size};
+      const VolumePlacement placement = (*caster)->placement();
       const Camera camera = orbit_camera(placement, 30.0, 25.0, 1.25);
       RenderSettings base;
       base.channels[0].window_lo = 20;
@@ -47,7 +49,7 @@ void add_demo_command(CLI::App& app, Invocation& inv) {
       views[3].density = 0.2;
       ImageRgba8 mosaic(512, 512);
       for (int k = 0; k < 4; ++k) {
-        auto image = (*caster)->render(camera, views[k], 256, 256);
+        auto image = (*caster)->render(camera, views[k], BrickFrameSettings{}, 256, 256);
         if (!image) return fail(image.status());
         const ImageRgba8 shown = over_black(*image);
         for (uint32_t y = 0; y < 256; ++y)

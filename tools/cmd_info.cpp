@@ -16,7 +16,19 @@ nlohmann::json volume_info_json(const VolumeInfo& i) {
           {"channels", i.channels},
           {"timepoints", i.timepoints},
           {"voxel_size", {i.voxel_size[0], i.voxel_size[1], i.voxel_size[2]}},
+          {"origin", {i.origin[0], i.origin[1], i.origin[2]}},
           {"unit", i.unit}};
+}
+
+// The lines every text `info` has: dims, dtype, channels, timepoints, voxel size, origin (when set).
+void print_volume_info_text(const VolumeInfo& i) {
+  std::printf("dims:        %llu x %llu x %llu\n", (unsigned long long)i.dims[0], (unsigned long long)i.dims[1],
+              (unsigned long long)i.dims[2]);
+  std::printf("dtype:       %s\n", dtype_name(i.dtype));
+  std::printf("channels:    %u\ntimepoints:  %u\n", i.channels, i.timepoints);
+  std::printf("voxel size:  %g x %g x %g %s\n", i.voxel_size[0], i.voxel_size[1], i.voxel_size[2], i.unit.c_str());
+  if (i.origin != std::array<double, 3>{0, 0, 0})
+    std::printf("origin:      %g, %g, %g %s\n", i.origin[0], i.origin[1], i.origin[2], i.unit.c_str());
 }
 
 // Units and paths come from files: bytes that are not UTF-8 print as U+FFFD instead of throwing.
@@ -50,11 +62,7 @@ int describe_zarr(const std::string& path, bool as_json) {
     return kExitOk;
   }
   std::printf("folder:      %s (%s)\n", path.c_str(), format.c_str());
-  std::printf("dims:        %llu x %llu x %llu\n", (unsigned long long)i.dims[0], (unsigned long long)i.dims[1],
-              (unsigned long long)i.dims[2]);
-  std::printf("dtype:       %s\n", dtype_name(i.dtype));
-  std::printf("channels:    %u\ntimepoints:  %u\n", i.channels, i.timepoints);
-  std::printf("voxel size:  %g x %g x %g %s\n", i.voxel_size[0], i.voxel_size[1], i.voxel_size[2], i.unit.c_str());
+  print_volume_info_text(i);
   std::printf("levels:      %zu (the out-of-core renderer uses %zu)\n", img.levels().size(), (*src)->levels().size());
   for (size_t l = 0; l < img.levels().size(); ++l) {
     const auto& L = img.levels()[l];
@@ -107,11 +115,7 @@ void add_info_command(CLI::App& app, Invocation& inv) {
         return kExitOk;
       }
       std::printf("file:        %s (%llu bytes)\n", path->c_str(), (unsigned long long)r.file_bytes());
-      std::printf("dims:        %llu x %llu x %llu\n", (unsigned long long)i.dims[0], (unsigned long long)i.dims[1],
-                  (unsigned long long)i.dims[2]);
-      std::printf("dtype:       %s\n", dtype_name(i.dtype));
-      std::printf("channels:    %u\ntimepoints:  %u\n", i.channels, i.timepoints);
-      std::printf("voxel size:  %g x %g x %g %s\n", i.voxel_size[0], i.voxel_size[1], i.voxel_size[2], i.unit.c_str());
+      print_volume_info_text(i);
       std::printf("chunks:      %llu of %u^3 (+%u apron), %llu uniform, codec %s\n", (unsigned long long)r.chunk_count(), r.chunk_size(),
                   r.apron(), (unsigned long long)uniform, codec_names[static_cast<int>(L.codec)]);
       std::printf("compression: %.2f : 1\n", r.compression_ratio());

@@ -1,5 +1,7 @@
-// `vxr render INPUT -o out.png`: one picture of a volume, on the GPU (compute
-// or fragment path) or with the CPU reference renderer (--reference).
+// `vxr render INPUT -o out.png`: one picture of a volume through the one
+// renderer vxr view uses (open_volume_session's source, the out-of-core brick
+// renderer), for every input. For comparison: --renderer dense (the dense
+// GPU ray caster, compute or fragment path) and --reference (CPU reference).
 //
 // Settings come from --settings (a RenderSettings JSON, or a Scene JSON with
 // "render" and "camera"), then the flags override them. Without a window the
@@ -10,6 +12,11 @@
 // resolved choice (input, timepoint, channels, windows, camera, size,
 // renderer); --card STORE:ID starts from that Scene, so the same build draws
 // the same pixels again.
+//
+// Timing (out-of-core renderer): --frames N --json prints each frame's GPU ms
+// (timestamp queries), wall ms and samples, with --reference also the RMSE
+// against the CPU reference of the finest level; --no-skip marches empty
+// space too (the same image; for A/B timing).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -18,6 +25,8 @@
 #include <fstream>
 #include <functional>
 #include <sstream>
+
+#include <nlohmann/json.hpp>
 
 #include "annotate/annotation_store.h"
 #include "annotate/file_io.h"
@@ -49,6 +58,8 @@ struct Options {
   bool lod_bias_given = false;
   int frames = 0;  // 0: until converged (lod) / one frame (dense)
   bool reference = false, stats = false;
+  bool no_skip = false;  // lod: no empty-space skipping (bricks or cells), for A/B timing
+  bool json = false;     // lod: per-frame figures as JSON on stdout
   bool size_given = false, timepoint_given = false, path_given = false;
   std::string card;       // STORE:ID to restore
   std::string save_card;  // STORE to add a card to
@@ -136,28 +147,23 @@ Result<std::string> read_text(const std::string& path) {
 
 using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 
-// The out-of-core path: a .vxc container, an OME-Zarr folder or a procedural source through the
-// brick renderer. Without --frame-budget-ms it renders until nothing is
-// missing (every wanted brick resident) and writes that frame; with it, it
+// The one renderer, for every input: open_volume_session's source (a .vxc
+// container or OME-Zarr folder read in place, a procedural source, or any
+// importable file with its pyramid built in memory) through the brick
+// renderer. Without --frame-budget-ms it renders until nothing is missing
+// (every wanted brick resident) and writes that frame; with it, it
 // renders --frames frames (default 30) letting the frame-budget controller set
 // the LOD bias, and writes the last.
 int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context& gpu, bool procedural, uint32_t width,
             uint32_t height, const CameraMaker& make_camera, Resolved* resolved) {
-  std::unique_ptr<ChunkSource> src;
-  if (procedural) {
-    auto p = open_procedural(o.input);
-    if (!p) return fail(p.status(), kExitUsage);
-    src = std::move(p).value();
-    if (!window_given) {  // `vxr bench lod`'s: above the background noise (0..6)
-      s.channels[0].window_lo = 8;
-      s.channels[0].window_hi = 200;
-      window_given = true;
-    }
-  } else {
-    auto r = open_chunk_source(o.input);
-    if (!r) return fail(r.status());
-    for (const std::string& w : r->warnings) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), w.c_str());
-    src = std::move(r->source);
+  auto session = open_volume_session(o.input, {});
+  if (!session) return fail(session.status(), procedural ? kExitUsage : kExitFailure);
+  for (const std::string& n : session->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
+  const std::shared_ptr<const ChunkSource> src = session->source;
+  if (procedural && !window_given) {  // `vxr bench lod`'s: above the background noise (0..6)
+    s.channels[0].window_lo = 8;
+    s.channels[0].window_hi = 200;
+    window_given = true;
   }
   const VolumeInfo& info = src->info();
   auto drawn = parse_channels(o.channel, info.channels);
@@ -201,7 +207,25 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   FrameBudget controller;
   controller.target_ms = o.frame_budget_ms;
   controller.bias = o.lod_bias;
+  frame.lod.skip_empty = !o.no_skip;
   const int max_frames = o.frames > 0 ? o.frames : budget ? 30 : 1000;
+  // --json --reference: the CPU reference of the finest level, once, to measure each frame against.
+  std::vector<uint8_t> reference_pixels;
+  double reference_ms = 0.0;
+  if (o.json && o.reference) {
+    std::vector<DenseVolume> level0;
+    for (uint32_t c : *drawn) {
+      auto dense = read_level_dense(*src, 0, c, o.timepoint, uint64_t(1) << 30);
+      if (!dense) return fail(dense.status());
+      level0.push_back(std::move(dense).value());
+    }
+    const auto r0 = std::chrono::steady_clock::now();
+    auto ref = render_reference(level0, camera, s, width, height, {o.reference_step, 0});
+    if (!ref) return fail(ref.status());
+    reference_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - r0).count();
+    reference_pixels = over_black(to_rgba8(*ref)).pixels;
+  }
+  nlohmann::json frames_json = nlohmann::json::array();
   BrickFrameStats st;
   uint64_t total_bytes = 0, total_bricks = 0;
   std::vector<double> frame_ms;
@@ -217,6 +241,23 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - f0).count();
     frame_ms.push_back(ms);
     ++frames;
+    if (o.json) {
+      nlohmann::json fj = {{"frame", frames},           {"wall_ms", ms},
+                           {"gpu_ms", st.gpu_ms},       {"samples", st.samples},
+                           {"bricks_drawn", st.lod.drawn}, {"bricks_missing", st.lod.missing},
+                           {"bricks_uploaded", st.bricks_uploaded}};
+      if (!reference_pixels.empty()) {
+        // 8-bit units over black, all four channels: what `vxr compare` reports.
+        const std::vector<uint8_t> px = over_black(*image).pixels;
+        double sq = 0.0;
+        for (size_t i = 0; i < px.size(); ++i) {
+          const double d = double(px[i]) - double(reference_pixels[i]);
+          sq += d * d;
+        }
+        fj["rmse_vs_reference"] = std::sqrt(sq / double(px.size()));
+      }
+      frames_json.push_back(fj);
+    }
     total_bytes += st.bytes_uploaded;
     total_bricks += st.bricks_uploaded;
     if (budget) {
@@ -234,6 +275,19 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
     return fail(internal_error(o.input + ": the view still missed bricks after " + std::to_string(frames) +
                                " frames; raise --lod-bias or render fewer pixels"));
   if (Status e = write_png(o.output, over_black(*image)); !e) return fail(e);
+  if (o.json) {
+    nlohmann::json j = {{"output", o.output},
+                        {"width", width},
+                        {"height", height},
+                        {"model", optical_model_name(s.model)},
+                        {"step_voxels", s.step_voxels},
+                        {"empty_space_skipping", !o.no_skip},
+                        {"device", gpu.info().name},
+                        {"frames", frames_json}};
+    if (o.reference) j["reference"] = {{"step_voxels", o.reference_step}, {"cpu_ms", reference_ms}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return kExitOk;
+  }
   std::printf("%s: %ux%u, %s, out-of-core (lod), %d frames%s, %.1f ms\n", o.output.c_str(), width, height,
               optical_model_name(s.model), frames, converged ? " to converge" : "", total_ms);
   if (budget) {
@@ -390,25 +444,30 @@ int run(const Options& given) {
   if (Status st = validate_render_settings(s, static_cast<uint32_t>(std::max<size_t>(1, s.channels.size()))); !st)
     return fail(st, kExitUsage);
 
-  // Which renderer: the out-of-core brick renderer for containers and
-  // procedural sources (the product's path for them), the dense one otherwise.
+  // Which renderer: the out-of-core brick renderer (vxr view's) for every
+  // input; the dense one only when asked for (--renderer dense, the fragment
+  // path, the CPU reference), as a comparison.
   const bool procedural = starts_with(o.input, "procedural:");
-  const bool container = is_chunk_source_input(o.input);  // .vxc or OME-Zarr, read in place
   if (!o.renderer.empty() && o.renderer != "lod" && o.renderer != "dense")
     return fail(invalid_argument("--renderer: use lod or dense, not '" + o.renderer + "'"), kExitUsage);
   std::string renderer = o.renderer;
-  if (renderer.empty()) renderer = (procedural || container) && !o.reference ? "lod" : "dense";
-  if (renderer == "lod" && !procedural && !container)
-    return fail(invalid_argument("--renderer lod: '" + o.input + "' is not a .vxc container or OME-Zarr folder; "
-                                 "convert it with `vxr import` first, or use --renderer dense"),
+  if (renderer.empty()) renderer = (o.reference && !o.json) || (o.path_given && o.path == "fragment") ? "dense" : "lod";
+  if (renderer == "lod" && o.path_given && o.path == "fragment")
+    return fail(invalid_argument("--path fragment: the dense renderer's fragment path; add --renderer dense"),
                 kExitUsage);
   if (renderer == "dense" && procedural)
     return fail(invalid_argument("--renderer dense: a procedural source is drawn only by --renderer lod"), kExitUsage);
-  if (renderer == "lod" && o.reference)
+  if (renderer == "dense" && (o.json || o.no_skip))
+    return fail(invalid_argument(std::string(o.json ? "--json" : "--no-skip") +
+                                 ": only the out-of-core renderer (--renderer lod) reports frames and skips empty space"),
+                kExitUsage);
+  if (o.json && (o.frame_budget_ms != 0.0 || !o.save_card.empty()))
+    return fail(invalid_argument("--json: measures fixed frames; drop --frame-budget-ms and --save-card"), kExitUsage);
+  if (renderer == "lod" && o.reference && !o.json)
     return fail(invalid_argument("--reference: the CPU reference draws a whole volume; use --renderer dense"), kExitUsage);
   if (renderer == "dense" && (o.lod_bias_given || o.frame_budget_ms != 0.0))
     return fail(invalid_argument(std::string(o.lod_bias_given ? "--lod-bias" : "--frame-budget-ms") +
-                                 ": only the out-of-core renderer has levels of detail; use --renderer lod with a .vxc"),
+                                 ": only the out-of-core renderer has levels of detail; drop --renderer dense"),
                 kExitUsage);
   if (o.frame_budget_ms < 0.0 || !std::isfinite(o.frame_budget_ms))
     return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
@@ -425,7 +484,7 @@ int run(const Options& given) {
 
   std::unique_ptr<gpu::Context> gpu;
   uint32_t max_dim = 2048;
-  if (!o.reference) {
+  if (!o.reference || renderer == "lod") {
     auto g = open_gpu();
     if (!g) return fail(g.status());
     gpu = std::move(g).value();
@@ -550,9 +609,10 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--step", o->step, "sample step in voxels");
   cmd->add_option("--channel", o->channel, "channels to draw, e.g. 2 or 0,2 (default: the first up to 4)");
   cmd->add_option("--timepoint", o->timepoint, "timepoint to draw (default 0; out-of-core renderer)");
-  cmd->add_option("--path", o->path, "compute (default) or fragment");
+  cmd->add_option("--path", o->path, "dense renderer: compute (default) or fragment (implies --renderer dense)");
   cmd->add_option("--renderer", o->renderer,
-                  "lod (out-of-core bricks; default for .vxc, OME-Zarr and procedural:vessels:SIDE) or dense (whole volume)");
+                  "lod (the out-of-core brick renderer vxr view uses; the default for every input) or dense (whole volume, "
+                  "a comparison)");
   cmd->add_option("--lod-bias", o->lod_bias, "lod: log2 of voxels per pixel accepted (+1 coarser, -1 finer; default 0)");
   cmd->add_option("--frame-budget-ms", o->frame_budget_ms,
                   "lod: render --frames frames, adjusting the LOD bias to hold this frame time");
@@ -560,6 +620,10 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_flag("--stats", o->stats, "print the final frame's statistics (bricks, samples, uploads, cache hits)");
   cmd->add_flag("--reference", o->reference, "render with the CPU reference renderer (double precision, slow)");
   cmd->add_option("--reference-step", o->reference_step, "the reference's step in voxels (default 1/16)");
+  cmd->add_flag("--no-skip", o->no_skip, "lod: march empty space too (no brick or cell skipping; same image, for timing)");
+  cmd->add_flag("--json", o->json,
+                "lod: print per-frame GPU ms, wall ms and samples as JSON (with --reference: RMSE against the CPU "
+                "reference of the finest level, 8-bit units)");
   cmd->add_option("--card", o->card, "STORE:ID: restore a card's scene (volume, camera, settings, size); flags override");
   cmd->add_option("--save-card", o->save_card, "STORE: also store the picture as a card with the full scene to restore it");
   cmd->add_option("--card-title", o->card_title, "with --save-card: the card's title");

@@ -80,6 +80,9 @@ int run(const Options& o) {
   }
   for (const std::string& n : session->notes)
     std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
+  if (const VolumeInfo& info = session->source->info(); info.channels > 1 || info.timepoints > 1)
+    std::fprintf(stderr, "vxr view: %s: showing channel 0 of timepoint 0 (of %u channels, %u timepoints)\n",
+                 o.input.c_str(), unsigned(info.channels), unsigned(info.timepoints));
   xr::TargetRequest req;
   req.kind = o.force_xr        ? xr::TargetKind::kOpenXr
              : o.force_desktop ? xr::TargetKind::kDesktop

@@ -70,54 +70,27 @@ Status EyeRenderer::record(VkCommandBuffer cmd, size_t index, const ViewSpec& vi
     if (rays) *rays = uint64_t(view.width) * view.height;
     return renderer_->record_view(cmd, camera, settings, frame, out, stats);
   }
-  if (!camera.frustum) return invalid_argument("lens warp: the view needs an off-axis frustum");
 
-  // The tiles: each band pair is an ordinary off-axis frustum (see lens_warp.h).
+  // One view over the whole frustum whose rays follow the warped grid, into
+  // the eye's warped intermediate.
   const VkFormat wf = is_unorm8(target.format) ? VK_FORMAT_R8G8B8A8_UNORM : VK_FORMAT_R32G32B32A32_SFLOAT;
   VXR_ASSIGN_OR_RETURN(gpu::Image * wimg, warp_image(index, ax.warped(), ay.warped(), wf));
-  const FrustumTangents& ft = *camera.frustum;
-  const uint32_t width = view.width, height = view.height;
-  auto tan_x = [&](double p) { return ft.left + p / width * (ft.right - ft.left); };
-  auto tan_y = [&](double p) { return ft.up - p / height * (ft.up - ft.down); };
-  const uint32_t xs_full[4] = {0, ax.edge_full, ax.edge_full + ax.centre, width};
-  const uint32_t ys_full[4] = {0, ay.edge_full, ay.edge_full + ay.centre, height};
-  const uint32_t xs_warp[4] = {0, ax.edge_warped, ax.edge_warped + ax.centre, ax.warped()};
-  const uint32_t ys_warp[4] = {0, ay.edge_warped, ay.edge_warped + ay.centre, ay.warped()};
-  BrickFrameStats sum;
-  uint64_t cast = 0;
+  RenderTarget grid{wimg->image, wf == VK_FORMAT_R8G8B8A8_UNORM ? wimg->view.get() : VK_NULL_HANDLE, wf,
+                    {wimg->extent.width, wimg->extent.height}, VK_IMAGE_LAYOUT_GENERAL};
+  grid.opaque = true;
+  grid.warp_x = ax;
+  grid.warp_y = ay;
+  VXR_RETURN_IF_ERROR(renderer_->record_view(cmd, camera, settings, frame, grid, stats));
   std::vector<VkImageBlit> blits;
-  for (int by = 0; by < 3; ++by)
-    for (int bx = 0; bx < 3; ++bx) {
-      const uint32_t w = xs_warp[bx + 1] - xs_warp[bx], h = ys_warp[by + 1] - ys_warp[by];
-      if (w == 0 || h == 0) continue;
-      Camera tile = camera;
-      tile.frustum = FrustumTangents{tan_x(xs_full[bx]), tan_x(xs_full[bx + 1]), tan_y(ys_full[by + 1]),
-                                     tan_y(ys_full[by])};
-      RenderTarget part{wimg->image, wf == VK_FORMAT_R8G8B8A8_UNORM ? wimg->view.get() : VK_NULL_HANDLE, wf,
-                        {wimg->extent.width, wimg->extent.height}, VK_IMAGE_LAYOUT_GENERAL};
-      part.rect = {{int32_t(xs_warp[bx]), int32_t(ys_warp[by])}, {w, h}};
-      part.opaque = true;
-      BrickFrameStats st;
-      VXR_RETURN_IF_ERROR(renderer_->record_view(cmd, tile, settings, frame, part, &st));
-      sum.lod.visited += st.lod.visited;
-      sum.lod.drawn += st.lod.drawn;
-      sum.lod.fallback += st.lod.fallback;
-      sum.lod.missing += st.lod.missing;
-      sum.lod.culled += st.lod.culled;
-      sum.lod.skipped_empty += st.lod.skipped_empty;
-      sum.traverse_ms += st.traverse_ms;
-      sum.dispatches += st.dispatches;
-      sum.bricks_uploaded = st.bricks_uploaded;
-      sum.bytes_uploaded = st.bytes_uploaded;
-      cast += uint64_t(w) * h;
-      VkImageBlit b{};
-      b.srcSubresource = b.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-      b.srcOffsets[0] = {int32_t(xs_warp[bx]), int32_t(ys_warp[by]), 0};
-      b.srcOffsets[1] = {int32_t(xs_warp[bx + 1]), int32_t(ys_warp[by + 1]), 1};
-      b.dstOffsets[0] = {int32_t(xs_full[bx]), int32_t(ys_full[by]), 0};
-      b.dstOffsets[1] = {int32_t(xs_full[bx + 1]), int32_t(ys_full[by + 1]), 1};
-      blits.push_back(b);
-    }
+  for (const WarpBand& band : warp_bands(ax, ay)) {
+    VkImageBlit b{};
+    b.srcSubresource = b.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    b.srcOffsets[0] = {int32_t(band.warped[0]), int32_t(band.warped[1]), 0};
+    b.srcOffsets[1] = {int32_t(band.warped[2]), int32_t(band.warped[3]), 1};
+    b.dstOffsets[0] = {int32_t(band.full[0]), int32_t(band.full[1]), 0};
+    b.dstOffsets[1] = {int32_t(band.full[2]), int32_t(band.full[3]), 1};
+    blits.push_back(b);
+  }
   // Resample: the bands stretched onto the eye's pixels (bilinear, like resample_warped).
   const VkImageLayout final_layout =
       target.layout == VK_IMAGE_LAYOUT_UNDEFINED ? VK_IMAGE_LAYOUT_GENERAL : target.layout;
@@ -130,8 +103,7 @@ Status EyeRenderer::record(VkCommandBuffer cmd, size_t index, const ViewSpec& vi
   image_barrier(cmd, target.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, final_layout);
   image_barrier(cmd, wimg->image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                 VK_IMAGE_LAYOUT_GENERAL);
-  if (rays) *rays = cast;
-  if (stats) *stats = sum;
+  if (rays) *rays = uint64_t(ax.warped()) * ay.warped();
   return Status::ok();
 }
 

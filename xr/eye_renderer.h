@@ -1,13 +1,14 @@
 // Records the views of a frame through the out-of-core renderer
 // (VolumeRenderer, implemented by BrickRenderer) into a FrameTarget's images:
-// the frame loop records every eye, lens-warp tiles included, into one
+// the frame loop records every eye, lens warp included, into one
 // command buffer and submits it once; nothing is read back.
 //
-// Lens warp: the 3x3 tiles of the warped grid (xr/lens_warp.h) are views
-// into one intermediate image per eye (RGBA8 for 8-bit UNORM targets, float
-// for the others so an sRGB target encodes unrounded linear values), then
-// nine linear-filtered blits stretch the bands onto the eye's pixels; the
-// centre band is a 1:1 copy.
+// Lens warp: the warped grid (xr/lens_warp.h) is ONE view whose rays follow
+// the warp (RenderTarget::warp_x/warp_y), drawn into one intermediate image
+// per eye (RGBA8 for 8-bit UNORM targets, float for the others so an sRGB
+// target encodes unrounded linear values); one blit of up to nine
+// linear-filtered regions stretches the bands onto the eye's pixels (the
+// centre band is a 1:1 copy).
 #pragma once
 
 #include <memory>
@@ -33,8 +34,7 @@ class EyeRenderer {
     return renderer_->begin_frame(cmd, frame);
   }
   // Records view `index` of the frame into `target` (shown over black: alpha
-  // 1). `rays` receives the rays cast, `stats` the view's LOD figures (summed
-  // over lens-warp tiles).
+  // 1). `rays` receives the rays cast, `stats` the view's LOD figures.
   Status record(VkCommandBuffer cmd, size_t index, const ViewSpec& view, const VolumeTransform& t,
                 const RenderSettings& settings, const BrickFrameSettings& frame, const LensWarp& warp,
                 const TargetImage& target, uint64_t* rays = nullptr, BrickFrameStats* stats = nullptr);

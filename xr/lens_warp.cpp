@@ -25,11 +25,19 @@ WarpAxis warp_axis(uint32_t full, const LensWarp& warp) {
   return a;
 }
 
-double WarpAxis::to_warped(double p) const {
-  const double e = edge_full, s = step;
-  if (p < e) return p / s;
-  if (p < e + centre) return edge_warped + (p - e);
-  return edge_warped + centre + (p - e - centre) / s;
+std::vector<WarpBand> warp_bands(const WarpAxis& ax, const WarpAxis& ay) {
+  const uint32_t xs_full[4] = {0, ax.edge_full, ax.edge_full + ax.centre, ax.full};
+  const uint32_t ys_full[4] = {0, ay.edge_full, ay.edge_full + ay.centre, ay.full};
+  const uint32_t xs_warp[4] = {0, ax.edge_warped, ax.edge_warped + ax.centre, ax.warped()};
+  const uint32_t ys_warp[4] = {0, ay.edge_warped, ay.edge_warped + ay.centre, ay.warped()};
+  std::vector<WarpBand> bands;
+  for (int by = 0; by < 3; ++by)
+    for (int bx = 0; bx < 3; ++bx) {
+      if (xs_warp[bx + 1] == xs_warp[bx] || ys_warp[by + 1] == ys_warp[by]) continue;
+      bands.push_back({{xs_warp[bx], ys_warp[by], xs_warp[bx + 1], ys_warp[by + 1]},
+                       {xs_full[bx], ys_full[by], xs_full[bx + 1], ys_full[by + 1]}});
+    }
+  return bands;
 }
 
 Result<ImageRgba8> render_lens_warped(Raycaster& caster, const Camera& camera, const RenderSettings& settings,
@@ -41,25 +49,16 @@ Result<ImageRgba8> render_lens_warped(Raycaster& caster, const Camera& camera, c
   // Output pixel edge -> tangent (x left to right, y top to bottom).
   auto tan_x = [&](double p) { return t.left + p / width * (t.right - t.left); };
   auto tan_y = [&](double p) { return t.up - p / height * (t.up - t.down); };
-  const uint32_t xs_full[4] = {0, ax.edge_full, ax.edge_full + ax.centre, width};
-  const uint32_t ys_full[4] = {0, ay.edge_full, ay.edge_full + ay.centre, height};
-  const uint32_t xs_warp[4] = {0, ax.edge_warped, ax.edge_warped + ax.centre, ax.warped()};
-  const uint32_t ys_warp[4] = {0, ay.edge_warped, ay.edge_warped + ay.centre, ay.warped()};
-
   ImageRgba8 warped(ax.warped(), ay.warped());
   uint64_t cast = 0;
-  for (int by = 0; by < 3; ++by) {
-    for (int bx = 0; bx < 3; ++bx) {
-      const uint32_t w = xs_warp[bx + 1] - xs_warp[bx], h = ys_warp[by + 1] - ys_warp[by];
-      if (w == 0 || h == 0) continue;
-      Camera tile = camera;
-      tile.frustum = FrustumTangents{tan_x(xs_full[bx]), tan_x(xs_full[bx + 1]), tan_y(ys_full[by + 1]),
-                                     tan_y(ys_full[by])};
-      VXR_ASSIGN_OR_RETURN(ImageRgba8 part, caster.render(tile, settings, w, h));
-      cast += uint64_t(w) * h;
-      for (uint32_t y = 0; y < h; ++y)
-        std::copy_n(part.at(0, y), size_t(w) * 4, warped.at(xs_warp[bx], ys_warp[by] + y));
-    }
+  for (const WarpBand& b : warp_bands(ax, ay)) {
+    const uint32_t w = b.warped[2] - b.warped[0], h = b.warped[3] - b.warped[1];
+    Camera tile = camera;
+    tile.frustum = FrustumTangents{tan_x(b.full[0]), tan_x(b.full[2]), tan_y(b.full[3]), tan_y(b.full[1])};
+    VXR_ASSIGN_OR_RETURN(ImageRgba8 part, caster.render(tile, settings, w, h));
+    cast += uint64_t(w) * h;
+    for (uint32_t y = 0; y < h; ++y)
+      std::copy_n(part.at(0, y), size_t(w) * 4, warped.at(b.warped[0], b.warped[1] + y));
   }
   if (rays) *rays = cast;
   if (ax.warped() == width && ay.warped() == height) return warped;

@@ -4,7 +4,7 @@
 //   for each (re)start: make the target -> Vulkan context (target's hooks)
 //     -> attach -> chunk cache (loader threads) + eye renderer
 //     frame loop: wait_frame -> interaction -> ONE command buffer: brick
-//                 uploads that arrived, then every view (lens-warp tiles
+//                 uploads that arrived, then every view (lens warp
 //                 included) recorded into the target's images -> one submit
 //                 -> end_frame
 //   a lost session/instance (wants_restart) tears everything down in order

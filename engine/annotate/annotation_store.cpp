@@ -4,6 +4,7 @@
 #include <leveldb/write_batch.h>
 
 #include <algorithm>
+#include <cstring>
 #include <cctype>
 #include <cinttypes>
 #include <cstdio>
@@ -55,6 +56,12 @@ std::string roi_key(Id id) {
 }
 std::string card_key(Id id) {
   return "card/" + hex16(id);
+}
+std::string mesh_key(Id id) {
+  return "mesh/" + hex16(id);
+}
+std::string mesh_data_key(Id id) {
+  return "meshdata/" + hex16(id);
 }
 std::string blob_key(Id id, const char* what) {
   return "blob/" + hex16(id) + "/" + what;
@@ -118,6 +125,26 @@ json card_json(const Card& c) {
           {"snapshot_path", c.snapshot_path},
           {"snapshot_bytes", c.snapshot_png.size()},
           {"audio_bytes", c.audio_wav.size()}};
+}
+
+json mesh_json(const StoredMesh& m) {
+  return {{"name", m.name}, {"parent", m.parent}, {"color", m.color}, {"vertices", m.vertices},
+          {"triangles", m.triangles}};
+}
+StoredMesh mesh_from(Id id, const json& j) {
+  return {id, j.at("name").get<std::string>(), j.at("parent").get<Id>(), j.at("color").get<std::array<double, 4>>(),
+          j.at("vertices").get<uint64_t>(), j.at("triangles").get<uint64_t>()};
+}
+
+// meshdata/<id>: little-endian u32 vertex count, u32 triangle count, the
+// positions as f64 x y z, the triangles as u32 a b c.
+std::string encode_mesh_data(const std::vector<Vec3>& positions, const std::vector<std::array<uint32_t, 3>>& tris) {
+  std::string out(8 + positions.size() * 24 + tris.size() * 12, '\0');
+  const uint32_t counts[2] = {uint32_t(positions.size()), uint32_t(tris.size())};
+  std::memcpy(out.data(), counts, 8);
+  std::memcpy(out.data() + 8, positions.data(), positions.size() * 24);
+  std::memcpy(out.data() + 8 + positions.size() * 24, tris.data(), tris.size() * 12);
+  return out;
 }
 
 template <typename T, typename F>
@@ -602,6 +629,102 @@ Status AnnotationStore::delete_roi(Id id) {
   (void)old;
   leveldb::WriteBatch batch;
   batch.Delete(roi_key(id));
+  return write(&batch);
+}
+
+Result<std::vector<Id>> AnnotationStore::add_meshes(const Mesh& mesh, double alpha) {
+  if (!(alpha >= 0.0 && alpha <= 1.0)) return invalid_argument("mesh opacity must be in 0..1");
+  for (const Vec3& p : mesh.positions) VXR_RETURN_IF_ERROR(finite3(p, "mesh vertex"));
+  leveldb::WriteBatch batch;
+  std::vector<Id> ids;
+  for (const MeshPart& part : mesh.parts) {
+    if (part.parent >= int(ids.size())) return invalid_argument("mesh part '" + part.name + "' comes before its parent");
+    StoredMesh m;
+    VXR_ASSIGN_OR_RETURN(m.id, next_id("mesh", &batch));
+    m.name = part.name;
+    m.parent = part.parent < 0 ? 0 : ids[size_t(part.parent)];
+    // Only the vertices this part uses, renumbered.
+    std::map<uint32_t, uint32_t> remap;
+    std::vector<Vec3> positions;
+    std::vector<std::array<uint32_t, 3>> tris;
+    for (uint32_t t = part.first_triangle; t < part.first_triangle + part.triangle_count; ++t) {
+      std::array<uint32_t, 3> tri{};
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = mesh.triangles.at(t)[k];
+        if (v >= mesh.positions.size()) return invalid_argument("mesh triangle refers to a missing vertex");
+        auto [it, fresh] = remap.try_emplace(v, uint32_t(positions.size()));
+        if (fresh) positions.push_back(mesh.positions[v]);
+        tri[k] = it->second;
+      }
+      tris.push_back(tri);
+    }
+    if (part.triangle_count > 0) {
+      const auto& c = mesh.materials.at(mesh.triangle_material.at(part.first_triangle)).color;
+      m.color = {c[0], c[1], c[2], alpha};
+    } else {
+      m.color[3] = alpha;
+    }
+    m.vertices = positions.size();
+    m.triangles = tris.size();
+    batch.Put(mesh_key(m.id), mesh_json(m).dump());
+    batch.Put(mesh_data_key(m.id), encode_mesh_data(positions, tris));
+    ids.push_back(m.id);
+  }
+  VXR_RETURN_IF_ERROR(write(&batch));
+  return ids;
+}
+
+Result<std::vector<StoredMesh>> AnnotationStore::meshes() const {
+  std::vector<StoredMesh> out;
+  VXR_RETURN_IF_ERROR(scan("mesh/", [&](const std::string& k, const std::string& v) {
+    auto m = decode<StoredMesh>(path_, k, v, [&](const json& j) { return mesh_from(parse_hex16(k.substr(5)), j); });
+    if (!m.is_ok()) return m.status();
+    out.push_back(std::move(*m));
+    return Status::ok();
+  }));
+  return out;
+}
+
+Result<Mesh> AnnotationStore::mesh_geometry(Id id) const {
+  VXR_ASSIGN_OR_RETURN(std::optional<std::string> meta, get(mesh_key(id)));
+  if (!meta) return not_there("mesh", id);
+  VXR_ASSIGN_OR_RETURN(StoredMesh info, decode<StoredMesh>(path_, mesh_key(id), *meta,
+                                                          [&](const json& j) { return mesh_from(id, j); }));
+  VXR_ASSIGN_OR_RETURN(std::optional<std::string> data, get(mesh_data_key(id)));
+  const std::string damaged = path_ + ": key " + mesh_data_key(id) + ": ";
+  if (!data || data->size() < 8) return corrupt(damaged + "missing or truncated; the store is damaged");
+  uint32_t counts[2];
+  std::memcpy(counts, data->data(), 8);
+  if (counts[0] != info.vertices || counts[1] != info.triangles ||
+      data->size() != 8 + uint64_t(counts[0]) * 24 + uint64_t(counts[1]) * 12)
+    return corrupt(damaged + "size does not match its counts; the store is damaged");
+  Mesh m;
+  m.positions.resize(counts[0]);
+  m.triangles.resize(counts[1]);
+  std::memcpy(m.positions.data(), data->data() + 8, size_t(counts[0]) * 24);
+  std::memcpy(m.triangles.data(), data->data() + 8 + size_t(counts[0]) * 24, size_t(counts[1]) * 12);
+  for (const auto& t : m.triangles)
+    for (uint32_t v : t)
+      if (v >= counts[0]) return corrupt(damaged + "a triangle refers to a missing vertex; the store is damaged");
+  m.materials = {{info.name, {float(info.color[0]), float(info.color[1]), float(info.color[2])}}};
+  m.triangle_material.assign(m.triangles.size(), 0);
+  m.parts = {{info.name, -1, 0, uint32_t(m.triangles.size())}};
+  return m;
+}
+
+Status AnnotationStore::delete_mesh(Id id) {
+  VXR_ASSIGN_OR_RETURN(std::vector<StoredMesh> all, meshes());
+  if (std::none_of(all.begin(), all.end(), [&](const StoredMesh& m) { return m.id == id; })) return not_there("mesh", id);
+  // The mesh and everything below it, in one batch.
+  std::vector<Id> doomed{id};
+  for (size_t i = 0; i < doomed.size(); ++i)
+    for (const StoredMesh& m : all)
+      if (m.parent == doomed[i]) doomed.push_back(m.id);
+  leveldb::WriteBatch batch;
+  for (Id d : doomed) {
+    batch.Delete(mesh_key(d));
+    batch.Delete(mesh_data_key(d));
+  }
   return write(&batch);
 }
 

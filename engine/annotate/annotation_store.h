@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "annotate/annotations.h"
+#include "annotate/obj.h"
 #include "annotate/skeleton.h"
 #include "core/status.h"
 
@@ -104,6 +105,16 @@ class AnnotationStore {
   Status delete_roi(Id id);
   // The annotations inside `box`; with `timepoint`, markers and measurements
   // at other timepoints are left out.
+  // Meshes: every part of `mesh` (positions in volume coordinates) becomes
+  // one StoredMesh, parents before children, in one batch; returns their ids
+  // in part order. Its colour is its first triangle's material.
+  Result<std::vector<Id>> add_meshes(const Mesh& mesh, double alpha = 1.0);
+  Result<std::vector<StoredMesh>> meshes() const;
+  // One stored part's triangles (only its own, not its children's).
+  Result<Mesh> mesh_geometry(Id id) const;
+  // Deletes the mesh and every mesh below it.
+  Status delete_mesh(Id id);
+
   Result<RoiContents> query(const Roi& box, std::optional<uint32_t> timepoint = std::nullopt) const;
 
   // Cards. scene_json must parse as a Scene; snapshot bytes must be a PNG and

@@ -82,6 +82,18 @@ struct Roi {
   bool operator==(const Roi&) const = default;
 };
 
+// A segmented surface (one part of an imported OBJ: a tissue, a cell, a
+// substructure). The triangles live beside it in the store; `parent` makes
+// the hierarchy (0: top level).
+struct StoredMesh {
+  Id id = 0;
+  std::string name;
+  Id parent = 0;
+  std::array<double, 4> color{0.8, 0.8, 0.8, 1.0};
+  uint64_t vertices = 0, triangles = 0;
+  bool operator==(const StoredMesh&) const = default;
+};
+
 // A saved finding: the Scene to restore, a note, and optional media.
 struct Card {
   Id id = 0;

@@ -126,14 +126,18 @@ Status ToolPalette::refresh(uint32_t timepoint) {
   return Status::ok();
 }
 
+Marker ToolPalette::marker_at(const ToolEvent& e) const {
+  Marker m;
+  m.cls = cls_;
+  m.color = color_;
+  m.pos = e.cursor;
+  m.timepoint = e.timepoint;
+  return m;
+}
+
 Status ToolPalette::count(const ToolEvent& e) {
   if (e.action == ToolAction::kPress) {
-    Marker m;
-    m.cls = cls_;
-    m.color = color_;
-    m.pos = e.cursor;
-    m.timepoint = e.timepoint;
-    VXR_ASSIGN_OR_RETURN(Id id, store_.add_marker(m));
+    VXR_ASSIGN_OR_RETURN(Id id, store_.add_marker(marker_at(e)));
     live_.last_edit = "marker " + std::to_string(id) + " (" + cls_ + ") at " + at_text(e.cursor);
   } else if (e.action == ToolAction::kRemove) {
     VXR_ASSIGN_OR_RETURN(std::vector<Marker> all, store_.markers());
@@ -234,12 +238,7 @@ Status ToolPalette::trace(const ToolEvent& e) {
 Status ToolPalette::track(const ToolEvent& e) {
   switch (e.action) {
     case ToolAction::kPress: {
-      Marker m;
-      m.cls = cls_;
-      m.color = color_;
-      m.pos = e.cursor;
-      m.timepoint = e.timepoint;
-      VXR_ASSIGN_OR_RETURN(Id id, store_.add_marker(m));
+      VXR_ASSIGN_OR_RETURN(Id id, store_.add_marker(marker_at(e)));
       Status st = Status::ok();
       if (live_.track == 0) {
         Result<Id> t = store_.add_track("tracked", {id});

@@ -77,6 +77,7 @@ class ToolPalette {
   Status track(const ToolEvent& e);
   Status roi(const ToolEvent& e);
   Status refresh(uint32_t timepoint);
+  Marker marker_at(const ToolEvent& e) const;  // of the current class, at the cursor and timepoint
 
   AnnotationStore& store_;
   double pick_radius_;

@@ -1,5 +1,6 @@
 #include "render/annotation_renderer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -23,6 +24,24 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
   const VkShaderStageFlags stages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
   return {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, stages, nullptr},
           {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, stages, nullptr}};
+}
+
+std::vector<VkDescriptorSetLayoutBinding> mesh_bindings() {
+  const VkShaderStageFlags stages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+  return {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, nullptr},
+          {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, stages, nullptr},
+          {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, nullptr}};
+}
+
+// A host-visible storage buffer at least `bytes` long, grown (and rebound) when needed.
+Status ensure_storage(gpu::Context& ctx, gpu::Buffer& buffer, VkDeviceSize bytes, VkDescriptorSet set,
+                      uint32_t binding, const char* name) {
+  bytes = std::max<VkDeviceSize>(bytes, 16);
+  if (buffer.size >= bytes) return Status::ok();
+  VXR_ASSIGN_OR_RETURN(buffer, gpu::create_buffer(ctx, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                        gpu::MemoryIntent::kUpload, name}));
+  gpu::write_storage_buffer(ctx, set, binding, buffer.buffer);
+  return Status::ok();
 }
 
 }  // namespace
@@ -51,6 +70,21 @@ AnnotationScene annotation_scene(std::span<const annotate::Marker> markers,
   return scene;
 }
 
+AnnotationMesh annotation_mesh(const annotate::Mesh& mesh, const glm::dvec3& offset, double scale, float alpha) {
+  AnnotationMesh out;
+  out.corners.reserve(mesh.triangles.size() * 3);
+  out.colors.reserve(mesh.triangles.size());
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (uint32_t v : mesh.triangles[t]) {
+      const annotate::Vec3& p = mesh.positions[v];
+      out.corners.push_back(offset + scale * glm::dvec3(p[0], p[1], p[2]));
+    }
+    const auto& c = mesh.materials[mesh.triangle_material[t]].color;
+    out.colors.push_back({c[0], c[1], c[2], alpha});
+  }
+  return out;
+}
+
 Result<std::unique_ptr<AnnotationRenderer>> AnnotationRenderer::create(gpu::Context& ctx) {
   std::unique_ptr<AnnotationRenderer> r(new AnnotationRenderer(ctx));
   gpu::GraphicsPipelineCreateInfo info;
@@ -66,6 +100,15 @@ Result<std::unique_ptr<AnnotationRenderer>> AnnotationRenderer::create(gpu::Cont
                                                           VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                                                           gpu::MemoryIntent::kUpload, "imposter view"}));
   gpu::write_uniform_buffer(ctx, r->set_, 1, r->view_.buffer);
+
+  gpu::GraphicsPipelineCreateInfo mesh = info;
+  mesh.vertex_shader = "mesh.vert";
+  mesh.fragment_shader = "mesh.frag";
+  mesh.bindings = mesh_bindings();
+  VXR_ASSIGN_OR_RETURN(r->mesh_pipeline_, gpu::create_graphics_pipeline(ctx, mesh));
+  VXR_ASSIGN_OR_RETURN(r->mesh_pool_, gpu::create_descriptor_pool(ctx, mesh.bindings, 1));
+  VXR_ASSIGN_OR_RETURN(r->mesh_set_, gpu::allocate_descriptor_set(ctx, r->mesh_pool_, r->mesh_pipeline_.set_layout));
+  gpu::write_uniform_buffer(ctx, r->mesh_set_, 1, r->view_.buffer);
   return r;
 }
 
@@ -104,13 +147,24 @@ Result<AnnotationImage> AnnotationRenderer::render(const Camera& camera, const A
     if (!(c.ra > 0.0) || !(c.rb > 0.0)) continue;
     prims.push_back({to_vec4(c.a - rays.eye, c.ra), to_vec4(c.b - rays.eye, c.rb), c.color});
   }
-  const VkDeviceSize bytes = std::max<VkDeviceSize>(1, prims.size()) * sizeof(shader::ImposterPrimitive);
-  if (prims_.size < bytes) {
-    VXR_ASSIGN_OR_RETURN(prims_, gpu::create_buffer(ctx_, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                                           gpu::MemoryIntent::kUpload, "imposter primitives"}));
-    gpu::write_storage_buffer(ctx_, set_, 0, prims_.buffer);
-  }
+  VXR_RETURN_IF_ERROR(ensure_storage(ctx_, prims_, prims.size() * sizeof(shader::ImposterPrimitive), set_, 0,
+                                     "imposter primitives"));
   if (!prims.empty()) std::memcpy(prims_.mapped, prims.data(), prims.size() * sizeof(shader::ImposterPrimitive));
+
+  // Mesh corners camera-relative too, all meshes in one draw.
+  std::vector<glm::vec4> corners, colors;
+  for (const AnnotationMesh& m : scene.meshes) {
+    if (m.corners.size() != m.colors.size() * 3)
+      return invalid_argument("annotations: a mesh needs 3 corners per triangle colour");
+    for (const glm::dvec3& c : m.corners) corners.push_back(to_vec4(c - rays.eye, 1.0));
+    colors.insert(colors.end(), m.colors.begin(), m.colors.end());
+  }
+  VXR_RETURN_IF_ERROR(ensure_storage(ctx_, corners_, corners.size() * sizeof(glm::vec4), mesh_set_, 0, "mesh corners"));
+  VXR_RETURN_IF_ERROR(ensure_storage(ctx_, colors_, colors.size() * sizeof(glm::vec4), mesh_set_, 2, "mesh colours"));
+  if (!corners.empty()) {
+    std::memcpy(corners_.mapped, corners.data(), corners.size() * sizeof(glm::vec4));
+    std::memcpy(colors_.mapped, colors.data(), colors.size() * sizeof(glm::vec4));
+  }
 
   // [forward right up] maps (s, s nx, -s ny) to a camera-relative point; the
   // vertex shader needs the inverse.
@@ -161,14 +215,20 @@ Result<AnnotationImage> AnnotationRenderer::render(const Camera& camera, const A
     ri.pColorAttachments = colors;
     ri.pDepthAttachment = &z;
     vkCmdBeginRendering(cmd, &ri);
+    const VkViewport vp{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
+    const VkRect2D sc{{0, 0}, {width, height}};
+    vkCmdSetViewport(cmd, 0, 1, &vp);
+    vkCmdSetScissor(cmd, 0, 1, &sc);
     if (!prims.empty()) {
-      const VkViewport vp{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
-      const VkRect2D sc{{0, 0}, {width, height}};
-      vkCmdSetViewport(cmd, 0, 1, &vp);
-      vkCmdSetScissor(cmd, 0, 1, &sc);
       vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.pipeline);
       vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout, 0, 1, &set_, 0, nullptr);
       vkCmdDraw(cmd, 36, uint32_t(prims.size()), 0, 0);
+    }
+    if (!corners.empty()) {
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, mesh_pipeline_.pipeline);
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, mesh_pipeline_.layout, 0, 1, &mesh_set_, 0,
+                              nullptr);
+      vkCmdDraw(cmd, uint32_t(corners.size()), 1, 0, 0);
     }
     vkCmdEndRendering(cmd);
   }));

@@ -1,5 +1,6 @@
 // Annotations drawn with the volume: count markers as spheres, traced
-// skeletons as spheres joined by the cones tangent to them (the paper's
+// skeletons as spheres joined by the cones tangent to them, segmented
+// surfaces (OBJ meshes) as flat-shaded triangles (the paper's
 // method: each primitive is ray-cast exactly in a fragment shader over guide
 // geometry, its bounding box, that the vertex shader builds on the GPU; no
 // tessellated meshes, so a sphere is round at any zoom).
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "annotate/annotations.h"
+#include "annotate/obj.h"
 #include "annotate/skeleton.h"
 #include "core/image.h"
 #include "core/status.h"
@@ -41,11 +43,21 @@ struct AnnotationCone {
   double ra = 1.0, rb = 1.0;
   glm::vec4 color{1, 1, 0, 1};
 };
+// A triangle mesh (a segmented surface), drawn flat-shaded with depth.
+struct AnnotationMesh {
+  std::vector<glm::dvec3> corners;  // 3 per triangle, world units
+  std::vector<glm::vec4> colors;    // per triangle, linear RGB, straight alpha
+};
 struct AnnotationScene {
   std::vector<AnnotationSphere> spheres;
   std::vector<AnnotationCone> cones;
-  bool empty() const { return spheres.empty() && cones.empty(); }
+  std::vector<AnnotationMesh> meshes;
+  bool empty() const { return spheres.empty() && cones.empty() && meshes.empty(); }
 };
+
+// An OBJ mesh placed in world space: world = offset + scale * p, each
+// triangle in its material's colour with `alpha`.
+AnnotationMesh annotation_mesh(const annotate::Mesh& mesh, const glm::dvec3& offset, double scale, float alpha = 1.0f);
 
 // A store's markers (at `timepoint`) and skeletons placed in world space:
 // markers as spheres of `marker_radius` world units, nodes as spheres of
@@ -73,10 +85,10 @@ class AnnotationRenderer {
   Status ensure_targets(uint32_t width, uint32_t height);
 
   gpu::Context& ctx_;
-  gpu::ComputePipeline pipeline_;
-  gpu::Handle<VkDescriptorPool> pool_;
-  VkDescriptorSet set_ = VK_NULL_HANDLE;
-  gpu::Buffer prims_, view_;
+  gpu::ComputePipeline pipeline_, mesh_pipeline_;
+  gpu::Handle<VkDescriptorPool> pool_, mesh_pool_;
+  VkDescriptorSet set_ = VK_NULL_HANDLE, mesh_set_ = VK_NULL_HANDLE;
+  gpu::Buffer prims_, view_, corners_, colors_;
   gpu::Image color_, depth_out_, zbuffer_;
 };
 

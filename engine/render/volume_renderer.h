@@ -5,7 +5,7 @@
 //
 //   wait for the previous frame's fence
 //   begin_frame(cmd)                       // bricks that arrived are copied in
-//   record_view(cmd, camera, ..., target)  // per eye (or lens-warp tile)
+//   record_view(cmd, camera, ..., target)  // per eye
 //   submit cmd; the next begin_frame waits for it
 //
 // The out-of-core BrickRenderer (render/lod/brick_renderer.h) implements it;
@@ -35,6 +35,9 @@ struct BrickFrameSettings {
   LodSettings lod;
   uint64_t upload_budget_bytes = UINT64_MAX;  // per frame; at least one brick is uploaded
   BrickPassMode mode = BrickPassMode::kAuto;
+  // With lod.skip_empty, rays also jump the empty cells inside drawn bricks
+  // (BrickCells; same image). Off: brick-level skipping only (measurements).
+  bool skip_cells = true;
 };
 
 struct BrickFrameStats {
@@ -47,7 +50,39 @@ struct BrickFrameStats {
   uint32_t dispatches = 0;
   double traverse_ms = 0.0;      // CPU octree traversal
   double render_ms = 0.0;        // ray-cast submission, wall clock
+  double gpu_ms = 0.0;           // BrickRenderer::render: the frame's commands on the GPU (timestamps; 0: none)
 };
+
+// One axis of a ray grid denser at the centre (the lens warp, xr/lens_warp.h),
+// in pixels: the middle `centre` pixels of the full image get one ray each,
+// each outer band of `edge_full` pixels gets one ray per `step` pixels. The
+// warp is piecewise linear, so the grid is one view whose rays follow it.
+struct WarpAxis {
+  uint32_t full = 0;         // output pixels
+  uint32_t edge_full = 0;    // output pixels in each outer band
+  uint32_t centre = 0;       // output (= warped) pixels in the centre band
+  uint32_t edge_warped = 0;  // rays across each outer band
+  uint32_t step = 1;
+  uint32_t warped() const { return centre + 2 * edge_warped; }
+  bool active() const { return edge_warped > 0 && step > 1; }
+  // Continuous warped coordinate of continuous output coordinate p (both in
+  // pixels, 0 at the first pixel's left edge), and its inverse.
+  double to_warped(double p) const {
+    const double e = edge_full, s = step;
+    if (p < e) return p / s;
+    if (p < e + centre) return edge_warped + (p - e);
+    return edge_warped + centre + (p - e - centre) / s;
+  }
+  double from_warped(double q) const {
+    const double e = edge_warped, s = step;
+    if (q < e) return q * s;
+    if (q < e + centre) return edge_full + (q - e);
+    return edge_full + centre + (q - e - centre) * s;
+  }
+};
+
+// No warp: one ray per pixel of `pixels`.
+inline WarpAxis identity_warp(uint32_t pixels) { return {pixels, 0, pixels, 0, 1}; }
 
 // An image on the renderer's device that a view is drawn into.
 struct RenderTarget {
@@ -60,6 +95,9 @@ struct RenderTarget {
   VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;
   VkRect2D rect{{0, 0}, {0, 0}};  // the pixels drawn; extent 0: the whole image
   bool opaque = false;            // composite over black, alpha 1 (display targets)
+  // Lens warp (both active, or neither): the rect is the warped grid
+  // (warp_x.warped() x warp_y.warped() rays) over the camera's whole frustum.
+  WarpAxis warp_x, warp_y;
 };
 
 // True for the 8-bit UNORM colour formats (the rounding rule applies).

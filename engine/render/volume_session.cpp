@@ -131,12 +131,6 @@ Result<VolumeSession> open_volume_session(const std::string& input, const Sessio
   }
   const VolumeInfo& info = out.source->info();
   out.description += " (" + dims_text(info) + ", " + std::to_string(out.source->levels().size()) + " levels)";
-  if (info.dtype != DType::kU8 && info.dtype != DType::kU16)
-    return unsupported(input + ": the out-of-core renderer draws u8 or u16 data, this is " +
-                       dtype_name(info.dtype) + "; convert it first");
-  if (info.channels > 1 || info.timepoints > 1)
-    out.notes.push_back("showing channel 0 of timepoint 0 (of " + std::to_string(info.channels) + " channels, " +
-                        std::to_string(info.timepoints) + " timepoints)");
   if (!window_known && flags.window.empty()) {
     VXR_ASSIGN_OR_RETURN(auto w, source_window(*out.source));
     out.settings.channels[0].window_lo = w.first;

@@ -51,7 +51,7 @@ struct FileHeader {
   uint8_t downsample;  // Downsample
   uint8_t codec;       // the codec the writer preferred for data chunks (informational)
   uint8_t reserved0;
-  uint8_t reserved[24];
+  double origin[3];  // physical position of voxel (0, 0, 0); files written before it hold zeros here
 };
 static_assert(sizeof(FileHeader) == 128);
 

@@ -116,6 +116,7 @@ std::vector<uint8_t> serialize_header(const ContainerLayout& layout) {
   for (int a = 0; a < 3; ++a) {
     h.dims[a] = layout.info.dims[a];
     h.voxel_size[a] = layout.info.voxel_size[a];
+    h.origin[a] = layout.info.origin[a];
   }
   h.channels = layout.info.channels;
   h.timepoints = layout.info.timepoints;
@@ -169,6 +170,7 @@ Result<ContainerLayout> parse_header(std::span<const uint8_t> bytes, const std::
   for (int a = 0; a < 3; ++a) {
     L.info.dims[a] = h.dims[a];
     L.info.voxel_size[a] = h.voxel_size[a];
+    L.info.origin[a] = h.origin[a];
   }
   L.info.dtype = static_cast<DType>(h.dtype);
   L.info.channels = h.channels;
@@ -188,6 +190,8 @@ Result<ContainerLayout> parse_header(std::span<const uint8_t> bytes, const std::
                      std::to_string(h.dims[1]) + " x " + std::to_string(h.dims[2]) + "); the file is damaged");
     if (!(h.voxel_size[a] > 0) || !std::isfinite(h.voxel_size[a]))
       return corrupt(what + ": header holds a voxel size that is not a positive number; the file is damaged");
+    if (!std::isfinite(h.origin[a]))
+      return corrupt(what + ": header holds an origin that is not a finite number; the file is damaged");
   }
   for (uint32_t l = 0; l < h.levels; ++l) {
     vxc::LevelRecord r;

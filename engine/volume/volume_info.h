@@ -16,6 +16,9 @@ struct VolumeInfo {
   uint32_t timepoints = 1;
   std::array<double, 3> voxel_size{1, 1, 1};  // physical size of one level-0 voxel
   std::string unit = "um";                    // "um", "nm", "mm", ... ("px" when unknown)
+  // Physical position (in `unit`) of voxel (0, 0, 0): OME-Zarr's translation,
+  // so volumes of one experiment keep their relative placement. 0 when unknown.
+  std::array<double, 3> origin{0, 0, 0};
 
   uint64_t voxels_per_volume() const { return dims[0] * dims[1] * dims[2]; }
 };

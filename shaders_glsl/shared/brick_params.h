@@ -29,7 +29,7 @@ struct BrickRecord {
   vec4 scale;   // xyz: local voxels per level-0 voxel along each axis (1 / downsample)
   vec4 box_lo;  // xyz: where marching starts being allowed (0, or the ROI), local voxels
   vec4 box_hi;  // xyz: the brick's extent clipped to the volume and the ROI
-  vec4 atlas;   // xyz: atlas texel coordinate of the local origin
+  vec4 atlas;   // xyz: atlas texel coordinate of the local origin; w: atlas slot (cell ranges), < 0: none
   vec4 plane;   // cut plane in local voxels: keep dot(xyz, p) + w >= 0; xyz = 0: none
 };
 
@@ -39,13 +39,14 @@ struct BrickRecord {
 // binding 7), filled by the same plan_raycast/pack_params.
 struct BrickCastParams {
   uvec4 control;   // xy: output pixel of the ray at (0, 0) (a rectangle of the target); z: first brick, w: brick count (single pass)
-  uvec4 pass;      // x: work-item base with VXR_BRICK_WORK_ITEMS, z: flags
-  vec4 atlas_inv;  // xyz: 1 / atlas size in texels
+  uvec4 pass;      // x: work-item base with VXR_BRICK_WORK_ITEMS, y: empty-space cells per brick axis (0: off), z: flags
+  vec4 atlas_inv;  // xyz: 1 / atlas size in texels, w: empty-space cell size in voxels
+  uvec4 warp;      // lens warp (z > 1): x, y: rays across each outer band along x, y; z: pixels per ray there
 };
 
 #ifdef __cplusplus
 static_assert(sizeof(BrickRecord) == 96, "brick record layout");
-static_assert(sizeof(BrickCastParams) == 48, "push constants must stay within 128 bytes");
+static_assert(sizeof(BrickCastParams) == 64, "push constants must stay within 128 bytes");
 }  // namespace vxr::shader
 #endif
 

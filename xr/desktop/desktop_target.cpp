@@ -76,7 +76,10 @@ DesktopTarget::~DesktopTarget() {
 
 std::string DesktopTarget::describe() const {
   return std::string("desktop window ") + std::to_string(o_.stereo ? 2 * o_.width : o_.width) + "x" +
-         std::to_string(o_.height) + (o_.stereo ? " (side-by-side stereo)" : "");
+         std::to_string(o_.height) + (o_.stereo ? " (side-by-side stereo)" : "") +
+         (swap_format_ == VK_FORMAT_UNDEFINED                                                       ? ""
+          : swap_format_ == VK_FORMAT_B8G8R8A8_SRGB || swap_format_ == VK_FORMAT_R8G8B8A8_SRGB ? ", sRGB swapchain"
+                                                                                                : ", UNORM swapchain");
 }
 
 Status DesktopTarget::prepare_context(gpu::ContextOptions& options) {
@@ -122,11 +125,18 @@ Status DesktopTarget::attach(gpu::Context& ctx) {
   VXR_VK_TRY(vkCreateFence(ctx.device(), &fci, nullptr, &fence));
   fence_ = gpu::Handle<VkFence>(ctx.device(), fence);
 
+  VXR_RETURN_IF_ERROR(create_swapchain());
+  // Eyes in the swapchain's encoding: on an sRGB window the renderer writes
+  // linear values the format encodes (as on an sRGB headset swapchain), and
+  // the blit copies the encoded bytes unchanged (decode + encode).
+  const bool srgb = swap_format_ == VK_FORMAT_B8G8R8A8_SRGB || swap_format_ == VK_FORMAT_R8G8B8A8_SRGB;
+  const VkFormat eye_format = srgb ? VK_FORMAT_R8G8B8A8_SRGB : VK_FORMAT_R8G8B8A8_UNORM;
   for (int v = 0; v < (o_.stereo ? 2 : 1); ++v) {
     VXR_ASSIGN_OR_RETURN(gpu::Image img,
-                         gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R8G8B8A8_UNORM, {o_.width, o_.height, 1},
+                         gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, eye_format, {o_.width, o_.height, 1},
                                                  VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
-                                                     VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT,
+                                                     VK_IMAGE_USAGE_SAMPLED_BIT |
+                                                     (srgb ? 0u : VK_IMAGE_USAGE_STORAGE_BIT),
                                                  "desktop eye"}));
     VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
       image_barrier(cmd, img.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
@@ -134,7 +144,7 @@ Status DesktopTarget::attach(gpu::Context& ctx) {
     }));
     eyes_.push_back(std::move(img));
   }
-  return create_swapchain();
+  return Status::ok();
 }
 
 Status DesktopTarget::create_swapchain() {

@@ -24,9 +24,11 @@ struct DesktopOptions {
   double ipd_m = 0.064;
   uint64_t end_frame = 0;               // close after this many frames; 0: when the window is closed
   std::string screenshot_path;          // at exit, grab the window from the X server into this PNG
-  // Mirror of an sRGB headset swapchain: an sRGB window swapchain, so the
-  // blit copies the encoded bytes unchanged (decode + encode).
-  bool srgb_swapchain = false;
+  // Prefer an sRGB window swapchain (UNORM where the window has none): the
+  // eyes are then sRGB images the renderer writes linear values into, as on
+  // an sRGB headset swapchain, and a mirror's blit copies the encoded bytes
+  // unchanged (decode + encode).
+  bool srgb_swapchain = true;
 };
 
 // Why there is no usable window system (no DISPLAY, GLFW or Vulkan surface

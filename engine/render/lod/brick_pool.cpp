@@ -49,6 +49,47 @@ void convert_to_texels(DType dtype, const uint8_t* in, size_t n, uint8_t* out) {
   }
 }
 
+BrickCells brick_cells_for(uint32_t chunk_size) {
+  BrickCells c;
+  c.cells_per_axis = std::clamp((chunk_size + 7) / 8, 1u, 16u);
+  c.cell_size = (chunk_size + c.cells_per_axis - 1) / c.cells_per_axis;
+  return c;
+}
+
+void compute_cell_ranges(VkFormat format, const uint8_t* texels, uint32_t chunk_size, uint32_t apron,
+                         const BrickCells& cells, glm::vec2* out) {
+  const uint32_t edge = chunk_size + 2 * apron, n = cells.cells_per_axis, s = cells.cell_size;
+  auto value = [&](size_t i) -> float {
+    if (format == VK_FORMAT_R8_UNORM) return float(texels[i]) / 255.0f;
+    if (format == VK_FORMAT_R16_UNORM) {
+      uint16_t v;
+      std::memcpy(&v, texels + 2 * i, 2);
+      return float(v) / 65535.0f;
+    }
+    float v;
+    std::memcpy(&v, texels + 4 * i, 4);
+    return v;
+  };
+  // Slot texel range of cell k along an axis: local voxels k*s - 1 .. k*s + s, clipped to the slot.
+  auto lo_of = [&](uint32_t k) { return uint32_t(std::max<int64_t>(int64_t(k) * s - 1 + apron, 0)); };
+  auto hi_of = [&](uint32_t k) { return uint32_t(std::min<int64_t>(int64_t(k) * s + s + apron, edge - 1)); };
+  for (uint32_t cz = 0; cz < n; ++cz)
+    for (uint32_t cy = 0; cy < n; ++cy)
+      for (uint32_t cx = 0; cx < n; ++cx) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (uint32_t z = lo_of(cz); z <= hi_of(cz); ++z)
+          for (uint32_t y = lo_of(cy); y <= hi_of(cy); ++y)
+            for (uint32_t x = lo_of(cx); x <= hi_of(cx); ++x) {
+              const float v = value((size_t(z) * edge + y) * edge + x);
+              lo = std::min(lo, v);
+              hi = std::max(hi, v);
+            }
+        // Filtering mixes values with rounded weights: widen by far more than its rounding.
+        const float pad_lo = std::abs(lo) * 1e-5f + 1e-7f, pad_hi = std::abs(hi) * 1e-5f + 1e-7f;
+        out[(size_t(cz) * n + cy) * n + cx] = glm::vec2(lo - pad_lo, hi + pad_hi);
+      }
+}
+
 Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_bytes, uint32_t max_dim,
                              uint64_t max_bytes) {
   const uint64_t brick_bytes = uint64_t(edge) * edge * edge * texel_bytes;
@@ -142,6 +183,13 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   }));
   p->slot_.resize(p->capacity());
   for (uint32_t i = p->capacity(); i-- > 0;) p->free_.push_back(i);
+  p->cells_ = brick_cells_for(source.chunk_size());
+  const uint64_t cell_bytes = uint64_t(p->capacity()) * nch * p->cells_.count() * sizeof(glm::vec2);
+  VXR_ASSIGN_OR_RETURN(p->cell_ranges_, gpu::create_buffer(ctx, {cell_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                                 gpu::MemoryIntent::kUpload, "brick cell ranges"}));
+  // Until a brick is staged its cells are "anything": never skipped.
+  auto* cells = static_cast<glm::vec2*>(p->cell_ranges_.mapped);
+  for (uint64_t i = 0; i < cell_bytes / sizeof(glm::vec2); ++i) cells[i] = glm::vec2(-INFINITY, INFINITY);
   return p;
 }
 
@@ -314,6 +362,11 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
       r.imageExtent = {edge_, edge_, edge_};
       regions[c].push_back(r);
     }
+    const VkFormat format = atlases_[0].format;
+    for (uint32_t c = 0; c < channels(); ++c)
+      compute_cell_ranges(format, static_cast<const uint8_t*>(staging_.mapped) + ring + c * channel_bytes_,
+                          src_.chunk_size(), apron_, cells_,
+                          static_cast<glm::vec2*>(cell_ranges_.mapped) + (size_t(*slot) * channels() + c) * cells_.count());
     ring += (brick_bytes_ + 15) & ~uint64_t(15);
     slot_[*slot] = {key, frame_, false, true};
     map_[key] = *slot;

@@ -79,6 +79,28 @@ double brick_value_scale(DType dtype);
 // `n` native voxels -> atlas texels of brick_texel_format(dtype).
 void convert_to_texels(DType dtype, const uint8_t* in, size_t n, uint8_t* out);
 
+// Empty-space cells inside a brick: each slot's interior is cut into
+// cells_per_axis^3 cells of cell_size voxels (the last one per axis may be
+// shorter), and for each cell the pool keeps the min and max texel value
+// (atlas texel units, per channel) over every voxel a trilinear sample taken
+// within half a voxel of the cell reaches: cell voxels -1 .. cell_size (clipped
+// to the slot). The ranges do not depend on the transfer function; the ray
+// caster classifies them per frame and jumps over cells that cannot change a
+// pixel (brick_raycast.comp). Filled at upload, from the staged texels.
+struct BrickCells {
+  uint32_t cells_per_axis = 1;
+  uint32_t cell_size = 8;  // voxels
+  uint32_t count() const { return cells_per_axis * cells_per_axis * cells_per_axis; }
+};
+// About 8 voxels per cell, at most 16 cells per axis.
+BrickCells brick_cells_for(uint32_t chunk_size);
+// The ranges of one channel of a slot (`texels`: edge^3 in `format`, edge =
+// chunk_size + 2 * apron) into out[count()] as (min, max), widened by a few
+// ulps so that a filtered value, however the device rounds its weights, lies
+// inside its cell's range.
+void compute_cell_ranges(VkFormat format, const uint8_t* texels, uint32_t chunk_size, uint32_t apron,
+                         const BrickCells& cells, glm::vec2* out);
+
 struct UploadStats {
   uint32_t bricks = 0;
   uint64_t bytes = 0;
@@ -140,6 +162,16 @@ class BrickPool {
   uint32_t capacity() const { return uint32_t(slots_.x) * slots_.y * slots_.z; }
   uint32_t used() const { return static_cast<uint32_t>(map_.size()); }
   uint64_t brick_bytes() const { return brick_bytes_; }  // one brick, every channel
+  // Per slot and drawn channel, the cell ranges (BrickCells): vec2 at
+  // ((slot * channels() + c) * cells().count() + cell). Host-visible storage
+  // buffer, written when a brick is staged.
+  const BrickCells& cells() const { return cells_; }
+  const gpu::Buffer& cell_ranges() const { return cell_ranges_; }
+  // The slot a resident brick occupies (its index in cell_ranges()).
+  uint32_t slot_of(ChunkKey key) const {
+    key.channel = 0;
+    return map_.at(key);
+  }
 
  private:
   struct Slot {
@@ -171,6 +203,8 @@ class BrickPool {
   std::vector<gpu::Image> atlases_;
   std::vector<uint32_t> channel_map_;
   gpu::Buffer staging_;
+  BrickCells cells_;
+  gpu::Buffer cell_ranges_;
   std::vector<Slot> slot_;
   std::vector<uint32_t> free_;
   std::unordered_map<ChunkKey, uint32_t, ChunkKeyHash> map_;  // keys with channel 0

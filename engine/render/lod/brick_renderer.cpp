@@ -24,6 +24,7 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {7, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell ranges
   };
 }
 
@@ -184,10 +185,10 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   }
   VXR_ASSIGN_OR_RETURN(r->linear_, gpu::create_linear_clamp_sampler(ctx));
   VXR_ASSIGN_OR_RETURN(r->transfer_tex_,
-                       gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT, {VXR_TF_SIZE, VXR_MAX_CHANNELS, 1},
+                       gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT, {VXR_TF_SIZE, 2 * VXR_MAX_CHANNELS, 1},
                                                VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                                                "transfer function"}));
-  VXR_ASSIGN_OR_RETURN(r->tf_staging_, gpu::create_buffer(ctx, {uint64_t(VXR_TF_SIZE) * VXR_MAX_CHANNELS * sizeof(glm::vec4),
+  VXR_ASSIGN_OR_RETURN(r->tf_staging_, gpu::create_buffer(ctx, {uint64_t(VXR_TF_SIZE) * 2 * VXR_MAX_CHANNELS * sizeof(glm::vec4),
                                                                 VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                                                 gpu::MemoryIntent::kUpload, "transfer function staging"}));
   VXR_ASSIGN_OR_RETURN(r->table_, gpu::create_buffer(ctx, {uint64_t(options.max_bricks) * sizeof(shader::BrickRecord),
@@ -198,6 +199,15 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->items_, gpu::create_buffer(ctx, {uint64_t(options.max_work_items) * sizeof(glm::uvec4),
                                                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                            gpu::MemoryIntent::kUpload, "brick work items"}));
+  if (ctx.timestamp_period_ns() > 0.0) {
+    VkQueryPoolCreateInfo qi{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    qi.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    qi.queryCount = 2;
+    VkQueryPool qp = VK_NULL_HANDLE;
+    if (VkResult vr = vkCreateQueryPool(ctx.device(), &qi, nullptr, &qp); vr != VK_SUCCESS)
+      return internal_error("brick renderer: vkCreateQueryPool failed (" + std::to_string(int(vr)) + ")");
+    r->timestamps_ = gpu::Handle<VkQueryPool>(ctx.device(), qp);
+  }
   r->params_stride_ = align_up(sizeof(shader::RaycastParams), ctx.limits().minUniformBufferOffsetAlignment);
   VXR_ASSIGN_OR_RETURN(r->params_, gpu::create_buffer(ctx, {r->params_stride_ * options.max_views,
                                                             VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
@@ -206,6 +216,8 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   all.push_back(r->mono_set_);
   for (VkDescriptorSet set : all) {
     if (set != r->mono_set_) r->bind_atlases(set, r->pool_atlases());
+    // The monolithic texture has no cells (its record says so); the binding still needs a buffer.
+    gpu::write_storage_buffer(ctx, set, 8, r->pool_->cell_ranges().buffer);
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
     // The core reads the table with texelFetch: the sampler's filter is unused.
     gpu::write_combined_image(ctx, set, 1, r->transfer_tex_.view, r->linear_);
@@ -277,8 +289,18 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
     return invalid_argument("record_view: the views of one frame must share one transfer function "
                             "(same colormap, window and opacity settings)");
   const size_t bytes = table.rgba.size() * sizeof(glm::vec4);
-  if (bytes != tf_staging_.size) return internal_error("transfer table has an unexpected size");
+  if (2 * bytes != tf_staging_.size) return internal_error("transfer table has an unexpected size");
   std::memcpy(tf_staging_.mapped, table.rgba.data(), bytes);
+  // Rows past the table: per channel, how many entries 0..i have non-zero
+  // opacity (the cell test asks "is any entry in i0..i1 opaque" in two fetches).
+  auto* counts = static_cast<glm::vec4*>(tf_staging_.mapped) + table.rgba.size();
+  for (int c = 0; c < VXR_MAX_CHANNELS; ++c) {
+    float n = 0.0f;
+    for (int i = 0; i < VXR_TF_SIZE; ++i) {
+      if (table.rgba[size_t(c) * VXR_TF_SIZE + i].a != 0.0f) n += 1.0f;
+      counts[size_t(c) * VXR_TF_SIZE + i] = glm::vec4(n, 0.0f, 0.0f, 0.0f);
+    }
+  }
   gpu::transition_image(cmd, transfer_tex_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                         VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
   VkBufferImageCopy region{};
@@ -364,6 +386,8 @@ Status BrickRenderer::rebuild_pool(uint32_t apron) {
   VXR_ASSIGN_OR_RETURN(pool_, BrickPool::create(ctx_, src_, po));
   opt_.pool = po;
   for (VkDescriptorSet set : view_sets_) bind_atlases(set, pool_atlases());
+  for (VkDescriptorSet set : view_sets_) gpu::write_storage_buffer(ctx_, set, 8, pool_->cell_ranges().buffer);
+  gpu::write_storage_buffer(ctx_, mono_set_, 8, pool_->cell_ranges().buffer);
   // Requested bricks are keyed the same; the new pool has none of them yet.
   return pin_resident(pinned_timepoint_);
 }
@@ -395,7 +419,7 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
   r.scale = v4(1.0 / ds);
   r.box_lo = v4(lo);
   r.box_hi = v4(hi);
-  r.atlas = glm::vec4(atlas_origin, 0.0f);
+  r.atlas = glm::vec4(atlas_origin, float(pool_->slot_of(key)));  // w: the slot, for its cell ranges
   if (clip.cut.enabled) {
     // dot(n, lo0 + ds * p) + d  ->  dot(n * ds, p) + dot(n, lo0) + d, normalised.
     const glm::dvec3 n = clip.cut.normal * ds;
@@ -408,7 +432,7 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
 Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
                                   uint32_t w, uint32_t h, uint32_t bricks, const glm::uvec3& atlas_texels,
                                   BrickPassMode mode, const std::vector<glm::uvec2>& waves, const RenderTarget& target,
-                                  uint32_t* dispatches_out) {
+                                  bool skip_cells, uint32_t* dispatches_out) {
   VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model));
   // RGBA8 UNORM with a storage view: the rays write it. Anything else (BGRA,
   // sRGB, float, no storage usage): final float pixels go to the
@@ -428,7 +452,22 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                              (is_unorm8(target.format) ? VXR_BRICK_QUANTIZE : 0u) |
                              (direct ? 0u : VXR_BRICK_FINAL_FLOAT);
   shader::BrickCastParams p{};
-  p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z, 0.0f);
+  // Empty-space cells: for the models whose empty samples change nothing
+  // (average counts every length, iso refines against the previous sample).
+  // MIP / MinIP test a cell against the ray's running value, so rays of a
+  // group diverge: measured with `vxr bench peer` (MRI, lavapipe) the test
+  // costs more than it saves at ~4 samples per cell (0.8x at step 2) and pays
+  // from ~8 (1.3x at step 1, 2x at 0.25).
+  const bool reduce = model == VXR_MODEL_MIP || model == VXR_MODEL_MINIP;
+  const bool cells = skip_cells && (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION ||
+                                    (reduce && pool_->cells().cell_size >= 8.0 * s.step_voxels));
+  const uint32_t cells_per_axis = cells ? pool_->cells().cells_per_axis : 0u;
+  p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
+                          float(pool_->cells().cell_size));
+  if (target.warp_x.active() || target.warp_y.active())
+    p.warp = glm::uvec4(target.warp_x.active() ? target.warp_x.edge_warped : 0u,
+                        target.warp_y.active() ? target.warp_y.edge_warped : 0u,
+                        std::max(target.warp_x.step, target.warp_y.step), 0u);
   uint32_t dispatches = 0;
 
   // The previous view's dispatches and blit used the same accumulation image.
@@ -443,7 +482,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set, 0, nullptr);
   auto dispatch = [&](uint32_t first, uint32_t count, uint32_t flags) {
     p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), first, count);
-    p.pass = glm::uvec4(0, 0, flags, 0);
+    p.pass = glm::uvec4(0, cells_per_axis, flags, 0);
     vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
     vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
     ++dispatches;
@@ -459,7 +498,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
       compute_barrier(cmd);  // a wave continues rays the previous one wrote
       for (uint32_t done = 0; done < wave.y; done += max_groups) {
         p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), 0, 0);
-        p.pass = glm::uvec4(wave.x + done, 0, VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM, 0);
+        p.pass = glm::uvec4(wave.x + done, cells_per_axis, VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM, 0);
         vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
         vkCmdDispatch(cmd, std::min(max_groups, wave.y - done), 1, 1);
         ++dispatches;
@@ -518,10 +557,18 @@ glm::uvec4 screen_rect(const BrickBox& b, const LodView& v) {
   const double by = std::clamp(std::ceil(px(y1, v.height)) + 2, 0.0, double(v.height));
   return {uint32_t(ax), uint32_t(ay), uint32_t(bx - ax), uint32_t(by - ay)};
 }
+
+// The warped-grid pixels covering full-image rectangle r (identity without a warp).
+glm::uvec4 warp_rect(const glm::uvec4& r, const WarpAxis& ax, const WarpAxis& ay) {
+  const uint32_t x0 = uint32_t(std::floor(ax.to_warped(r.x))), y0 = uint32_t(std::floor(ay.to_warped(r.y)));
+  const uint32_t x1 = std::min(ax.warped(), uint32_t(std::ceil(ax.to_warped(double(r.x) + r.z))));
+  const uint32_t y1 = std::min(ay.warped(), uint32_t(std::ceil(ay.to_warped(double(r.y) + r.w))));
+  return {x0, y0, x1 > x0 ? x1 - x0 : 0u, y1 > y0 ? y1 - y0 : 0u};
+}
 }  // namespace
 
 Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<ChunkKey>& draw, const LodView& view,
-                                                           glm::uvec4* dst, size_t capacity, size_t* used) {
+                                                           const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used) {
   // Each brick becomes one work item per 8x8 tile holding a pixel whose ray
   // hits it. A brick goes into the wave after the last wave that wrote any of
   // its pixels, so within a wave no two items write the same pixel (the shader
@@ -530,13 +577,17 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
   // against the brick's box grown by 0.1%, conservative against float error):
   // per tile, bricks that merely touch on screen would chain into as many
   // waves as bricks.
-  const uint32_t w = view.width, h = view.height;
+  const uint32_t w = ax.warped(), h = ay.warped();
   const uint32_t tw = (w + 7) / 8, th = (h + 7) / 8;
-  if (ray_dirs_.size() != size_t(w) * h || rays_for_ != std::make_tuple(view.forward, view.right, view.up)) {
+  const glm::uvec4 grid(ax.full, ay.full, ax.edge_full, ay.edge_full);
+  if (ray_dirs_.size() != size_t(w) * h || rays_for_ != std::make_tuple(view.forward, view.right, view.up) ||
+      rays_grid_ != grid) {
     ray_dirs_.resize(size_t(w) * h);
+    rays_grid_ = grid;
     for (uint32_t y = 0; y < h; ++y)
       for (uint32_t x = 0; x < w; ++x) {
-        const double nx = (x + 0.5) / w * 2.0 - 1.0, ny = (y + 0.5) / h * 2.0 - 1.0;
+        const double nx = ax.from_warped(x + 0.5) / ax.full * 2.0 - 1.0;
+        const double ny = ay.from_warped(y + 0.5) / ay.full * 2.0 - 1.0;
         const glm::dvec3 d = glm::normalize(view.forward + nx * view.right - ny * view.up);
         ray_dirs_[size_t(y) * w + x] = 1.0 / d;  // inverse: the slab test divides
       }
@@ -551,7 +602,7 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
   uint32_t waves = 0;
   std::vector<uint32_t> hit_pixels;
   for (uint32_t b = 0; b < draw.size(); ++b) {
-    const glm::uvec4 r = screen_rect(chunk_box(src_, draw[b]), view);
+    const glm::uvec4 r = warp_rect(screen_rect(chunk_box(src_, draw[b]), view), ax, ay);
     if (r.z == 0 || r.w == 0) continue;
     BrickBox box = chunk_box(src_, draw[b]);
     const glm::dvec3 grow = 1e-3 * (box.hi - box.lo);
@@ -598,13 +649,13 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
   return out;
 }
 
-Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, glm::uvec4* dst,
-                                       size_t capacity, size_t* used) {
-  const uint32_t tw = (view.width + 7) / 8, th = (view.height + 7) / 8;
+Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, const WarpAxis& ax,
+                                       const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used) {
+  const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
   std::vector<std::vector<uint32_t>> lists(size_t(tw) * th);
   size_t total = lists.size();
   for (uint32_t b = 0; b < draw.size(); ++b) {
-    const glm::uvec4 r = screen_rect(chunk_box(src_, draw[b]), view);
+    const glm::uvec4 r = warp_rect(screen_rect(chunk_box(src_, draw[b]), view), ax, ay);
     if (r.z == 0 || r.w == 0) continue;
     for (uint32_t y = r.y / 8; y <= (r.y + r.w - 1) / 8; ++y)
       for (uint32_t x = r.x / 8; x <= (r.x + r.z - 1) / 8; ++x) lists[size_t(y) * tw + x].push_back(b);
@@ -682,7 +733,12 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   VXR_RETURN_IF_ERROR(record_transfer(cmd, tf));
   VXR_RETURN_IF_ERROR(ensure_accum(width, height));
   BrickFrameStats st;
-  const LodView view = view_for(camera, width, height);
+  // Lens warp: traversal, LOD and rays see the full image; the dispatch covers the warped grid.
+  const WarpAxis ax = target.warp_x.active() ? target.warp_x : identity_warp(width);
+  const WarpAxis ay = target.warp_y.active() ? target.warp_y : identity_warp(height);
+  if (ax.warped() != width || ay.warped() != height || (ax.active() && ay.active() && ax.step != ay.step))
+    return invalid_argument("render: the lens-warp grid does not match the view's rectangle");
+  const LodView view = view_for(camera, ax.full, ay.full);
 
   auto t0 = std::chrono::steady_clock::now();
   LodQueries q;
@@ -727,17 +783,19 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   size_t items_n = 0;
   std::vector<glm::uvec2> waves;
   if (mode == BrickPassMode::kMultipass) {
-    VXR_ASSIGN_OR_RETURN(waves, build_waves(lod.draw, view, items_dst, items_capacity, &items_n));
+    VXR_ASSIGN_OR_RETURN(waves, build_waves(lod.draw, view, ax, ay, items_dst, items_capacity, &items_n));
   } else if (mode == BrickPassMode::kTiled) {
-    VXR_RETURN_IF_ERROR(build_tile_lists(lod.draw, view, items_dst, items_capacity, &items_n));
+    VXR_RETURN_IF_ERROR(build_tile_lists(lod.draw, view, ax, ay, items_dst, items_capacity, &items_n));
   }
   const VkDeviceSize items_bytes = std::max<size_t>(items_n, 1) * sizeof(glm::uvec4);
   if (items_base + items_bytes > items_.size) return out_of_range("render: the frame's work list is full");
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;
   st.hit_rate = wanted ? double(lod.stats.drawn - lod.stats.fallback) / double(wanted) : 1.0;
 
-  const shader::RaycastParams params =
-      pack_params(plan_raycast(camera, s, placement(), value_scales_, width, height), false);
+  shader::RaycastParams params =
+      pack_params(plan_raycast(camera, s, placement(), value_scales_, ax.full, ay.full), false);
+  params.control.y = width;  // the rays dispatched (the warped grid's)
+  params.control.z = height;
   const VkDeviceSize params_offset = VkDeviceSize(views_) * params_stride_;
   std::memcpy(static_cast<uint8_t*>(params_.mapped) + params_offset, &params, sizeof(params));
 
@@ -749,7 +807,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   gpu::write_storage_buffer(ctx_, set, 6, items_.buffer, items_bytes, items_base);
   gpu::write_uniform_buffer(ctx_, set, 7, params_.buffer, sizeof(shader::RaycastParams), params_offset);
   VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),
-                                  pool_->atlas_texels(), mode, waves, target, &st.dispatches));
+                                  pool_->atlas_texels(), mode, waves, target, frame.lod.skip_empty && frame.skip_cells, &st.dispatches));
   ++views_;
   table_used_ = table_base + table_bytes;
   items_used_ = items_base + items_bytes;
@@ -787,10 +845,23 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
   const RenderTarget target{target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL};
   const auto t0 = std::chrono::steady_clock::now();
   VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+    if (timestamps_) {
+      vkCmdResetQueryPool(cmd, timestamps_, 0, 2);
+      vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, timestamps_, 0);
+    }
     recorded = begin_frame(cmd, frame);
     if (recorded) recorded = record_view(cmd, camera, s, frame, target, &st);
+    if (timestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_BOTTOM_OF_PIPE_BIT, timestamps_, 1);
   }));
   VXR_RETURN_IF_ERROR(recorded);
+  if (timestamps_) {
+    uint64_t ticks[2] = {0, 0};
+    if (VkResult vr = vkGetQueryPoolResults(ctx_.device(), timestamps_, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
+                                            VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
+        vr != VK_SUCCESS)
+      return internal_error("brick renderer: vkGetQueryPoolResults failed (" + std::to_string(int(vr)) + ")");
+    st.gpu_ms = double(ticks[1] - ticks[0]) * ctx_.timestamp_period_ns() * 1e-6;
+  }
   st.render_ms = ms_since(t0) - st.traverse_ms;
   uint32_t c[2];
   std::memcpy(c, counters_.mapped, 8);
@@ -883,7 +954,7 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
   r.scale = v4(1.0 / ds);
   r.box_lo = v4(lo);
   r.box_hi = v4(hi);
-  r.atlas = glm::vec4(0.0f);
+  r.atlas = glm::vec4(0.0f, 0.0f, 0.0f, -1.0f);  // w < 0: no cell ranges
   if (clip.cut.enabled) {
     const glm::dvec3 n = clip.cut.normal * ds;
     const double len = glm::length(n);
@@ -907,7 +978,7 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
     gpu::write_storage_image(ctx_, mono_set_, 2, target_.view);
     gpu::write_storage_image(ctx_, mono_set_, 3, accum_.view);
     recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
-                           BrickPassMode::kSinglePass, {}, target, &st.dispatches);
+                           BrickPassMode::kSinglePass, {}, target, false, &st.dispatches);
   }));
   VXR_RETURN_IF_ERROR(recorded);
   st.render_ms = ms_since(t0);

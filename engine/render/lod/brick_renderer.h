@@ -22,6 +22,14 @@
 // bricks drawn: tiled 1.9 ms vs multipass 7.9, where waves cost a dispatch
 // and a barrier each and the GPU idles between them).
 //
+// Empty space is skipped twice, with identical images: the traversal drops
+// bricks whose min/max maps to zero opacity (brick_may_contribute), and rays
+// jump the empty cells (~8^3 voxels, BrickCells) inside the bricks they march,
+// on the same sample grid. LodSettings::skip_empty turns both off,
+// BrickFrameSettings::skip_cells the cells only (`vxr bench peer` measures).
+// Early ray termination: emission-absorption rays stop at transmittance
+// RenderSettings::early_termination, in every pass mode.
+//
 // render_monolithic() is the comparison path: one level of the source as a
 // single 3D texture, drawn by the same shader as one brick.
 //
@@ -59,7 +67,7 @@ struct BrickRendererOptions {
   BrickPoolOptions pool;
   uint32_t max_bricks = 16384;         // brick-table capacity per frame (all views together)
   uint32_t max_work_items = 1u << 20;  // multipass / tile-list entries per frame (all views together)
-  uint32_t max_views = 32;             // record_view calls per frame (eyes x lens-warp tiles)
+  uint32_t max_views = 32;             // record_view calls per frame (one per eye)
   // Streaming (vxr view): missing bricks are requested from this cache,
   // whose loader threads read and decode them; begin_frame copies in those
   // that have arrived. A frame never waits for I/O: until a brick arrives its
@@ -172,17 +180,20 @@ class BrickRenderer final : public VolumeRenderer {
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
                    const LodSettings& clip) const;
   // Records one view's dispatches with `set` and writes the result into `target`.
+  // `skip_cells`: rays jump the empty cells of each brick (BrickCells).
   // `model`: the packed parameters' VXR_MODEL_* (control.x).
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
-                     const std::vector<glm::uvec2>& waves, const RenderTarget& target, uint32_t* dispatches);
+                     const std::vector<glm::uvec2>& waves, const RenderTarget& target, bool skip_cells,
+                     uint32_t* dispatches);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
   // `dst` (capacity entries); returns (first item, count) per wave.
+  // `ax`, `ay`: the ray grid (identity_warp, or the lens warp's).
   Result<std::vector<glm::uvec2>> build_waves(const std::vector<ChunkKey>& draw, const LodView& view,
-                                              glm::uvec4* dst, size_t capacity, size_t* used);
+                                              const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
   // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen rectangle touches it.
-  Status build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, glm::uvec4* dst, size_t capacity,
-                          size_t* used);
+  Status build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, const WarpAxis& ax,
+                          const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
   gpu::Context& ctx_;
@@ -199,6 +210,7 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, tf_staging_;
+  gpu::Handle<VkQueryPool> timestamps_;  // render(): two per frame; null without timestamps
   VkDeviceSize params_stride_ = 0;
   // This frame: views recorded, and the table / work-list entries they took.
   uint32_t views_ = 0;
@@ -214,6 +226,7 @@ class BrickRenderer final : public VolumeRenderer {
   uint32_t apron_wanted_ = 0;        // a view needed a wider apron: the next begin_frame rebuilds the pool
   std::vector<glm::dvec3> ray_dirs_;  // per pixel 1/direction, for build_waves
   std::tuple<glm::dvec3, glm::dvec3, glm::dvec3> rays_for_;
+  glm::uvec4 rays_grid_{0};  // ray_dirs_'s grid: full sizes and warp bands
   std::vector<uint32_t> pixel_wave_;
   std::vector<double> value_scales_;  // per drawn channel: data units per texel unit
 };

@@ -339,6 +339,7 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
   info.channels = img->c_axis_ >= 0 ? static_cast<uint32_t>(m0.shape[img->c_axis_]) : 1;
   info.timepoints = img->t_axis_ >= 0 ? static_cast<uint32_t>(m0.shape[img->t_axis_]) : 1;
   info.voxel_size = L0.scale;
+  info.origin = L0.translation;
   if (img->space_axis_[2] < 0) info.voxel_size[2] = info.voxel_size[0];  // 2-D: one slice as thick as a pixel is wide
   if (same && units.front()) {
     info.unit = units.front()->name;
@@ -347,7 +348,7 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
     size_t k = 0;
     for (int a = 0; a < 3; ++a)
       if (img->space_axis_[a] >= 0) {
-        if (units[k]) info.voxel_size[a] *= units[k]->um;
+        if (units[k]) info.voxel_size[a] *= units[k]->um, info.origin[a] *= units[k]->um;
         ++k;
       }
     img->warnings_.push_back("space axes have different units; voxel sizes converted to um");

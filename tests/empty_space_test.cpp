@@ -1,0 +1,201 @@
+// Empty-space skipping inside bricks (BrickCells): rays jump cells whose
+// voxels cannot change a pixel under the frame's transfer function. Why the
+// pictures are right: for every optical model that skips, and for both pass
+// modes, the image with skipping is compared byte for byte with the image
+// without any skipping (bricks or cells) and with brick-level skipping only;
+// the cells must also remove samples, or the test fails (a no-op skip passes
+// nothing).
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "golden.h"
+#include "gpu_fixture.h"
+#include "render/lod/brick_renderer.h"
+#include "volume/dense_chunk_source.h"
+#include "volume/procedural_source.h"
+
+using namespace vxr;
+
+namespace {
+
+std::unique_ptr<ProceduralSource> sparse_vessels(uint64_t side) {
+  ProceduralOptions o;
+  o.dims = {side, side, side};
+  o.noise_max = 6;
+  auto r = ProceduralSource::create(o);
+  REQUIRE(r.is_ok());
+  return std::move(r).value();
+}
+
+ImageRgba8 converge(BrickRenderer& r, const Camera& cam, const RenderSettings& s, const BrickFrameSettings& f,
+                    uint32_t w, uint32_t h, BrickFrameStats* st) {
+  for (int i = 0; i < 64; ++i) {
+    auto img = r.render(cam, s, f, w, h, st);
+    REQUIRE(img.is_ok());
+    if (st->lod.missing == 0) return *img;
+  }
+  FAIL("did not converge in 64 frames");
+  return {};
+}
+
+}  // namespace
+
+TEST_CASE("empty-space cells: ranges cover every voxel a sample within half a voxel of the cell filters") {
+  // One R8 slot, chunk 16, apron 1: 18^3 texels, 2 cells of 8 voxels per axis.
+  const uint32_t cs = 16, apron = 1, edge = cs + 2 * apron;
+  const BrickCells cells = brick_cells_for(cs);
+  REQUIRE(cells.cells_per_axis == 2);
+  REQUIRE(cells.cell_size == 8);
+  std::vector<uint8_t> texels(size_t(edge) * edge * edge, 10);
+  auto at = [&](int x, int y, int z) -> uint8_t& {  // local voxel (apron at -1)
+    return texels[(size_t(z + apron) * edge + (y + apron)) * edge + (x + apron)];
+  };
+  at(8, 3, 3) = 200;   // first voxel of cell (1,0,0): cell (0,0,0) filters it too (its range reaches voxel 8)
+  at(-1, 12, 12) = 0;  // apron voxel: cell (0,1,1) reaches it
+  std::vector<glm::vec2> out(cells.count());
+  compute_cell_ranges(VK_FORMAT_R8_UNORM, texels.data(), cs, apron, cells, out.data());
+  auto cell = [&](int x, int y, int z) { return out[(size_t(z) * 2 + y) * 2 + x]; };
+  CHECK(cell(0, 0, 0).y >= 200.0f / 255.0f);
+  CHECK(cell(1, 0, 0).y >= 200.0f / 255.0f);
+  CHECK(cell(0, 1, 1).x <= 0.0f);
+  CHECK(cell(1, 1, 1).x > 9.0f / 255.0f);
+  CHECK(cell(1, 1, 1).y < 11.0f / 255.0f);
+  CHECK(cell(1, 1, 1).y >= 10.0f / 255.0f);  // widened, never narrowed
+  // Voxel 7 is reached from cell 0 only (a sample near 8.5 reads voxels 8 and 9, not 7).
+  at(8, 3, 3) = 10;
+  at(0, 3, 3) = 250;
+  compute_cell_ranges(VK_FORMAT_R8_UNORM, texels.data(), cs, apron, cells, out.data());
+  CHECK(cell(0, 0, 0).y >= 250.0f / 255.0f);
+  CHECK(cell(1, 0, 0).y < 11.0f / 255.0f);
+}
+
+TEST_CASE("empty-space cells: bit-identical with a gamma and with a transfer function that has gaps") {
+  // Gamma takes the pow path of the windowing; the opacity points make a
+  // transparent band inside the window, so cells inside the vessels can be empty too.
+  test::GpuTestScope scope;
+  auto src = sparse_vessels(128);
+  BrickRendererOptions ro;
+  ro.pool.slots = {8, 8, 8};
+  auto made = BrickRenderer::create(test::gpu_context(), *src, ro);
+  REQUIRE(made.is_ok());
+  BrickRenderer& r = **made;
+  const Camera cam = orbit_camera(r.placement(), 120, -30, 1.1);
+  for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kMip}) {
+    for (int variant = 0; variant < 2; ++variant) {
+      RenderSettings s;
+      s.model = model;
+      s.channels[0].colormap = "viridis";
+      s.channels[0].window_lo = 8;
+      s.channels[0].window_hi = 200;
+      if (variant == 0) s.channels[0].gamma = 0.6;
+      if (variant == 1)
+        s.channels[0].opacity_points = {{0.0, 0.0}, {0.3, 0.0}, {0.31, 0.8}, {0.6, 0.8}, {0.61, 0.0}, {1.0, 0.0}};
+      s.step_voxels = 0.7;
+      s.density = 0.5;
+      BrickFrameSettings f;
+      f.lod.force_level = 0;
+      BrickFrameStats on, off;
+      const ImageRgba8 a = converge(r, cam, s, f, 80, 64, &on);
+      f.lod.skip_empty = false;
+      const ImageRgba8 b = converge(r, cam, s, f, 80, 64, &off);
+      const std::string what = std::string(optical_model_name(model)) + (variant == 0 ? " gamma" : " band") +
+                               ": samples " + std::to_string(on.samples) + " vs " + std::to_string(off.samples);
+      INFO(what);
+      CHECK(test::looks_non_blank(a));
+      CHECK(a.pixels == b.pixels);
+      CHECK(on.samples < off.samples);
+    }
+  }
+}
+
+TEST_CASE("empty-space cells: a cell whose range reaches one table entry into the opaque part is marched") {
+  // A smooth ball (value falls linearly with the radius): every cell spans a
+  // few table entries, so cells straddle the step of a threshold transfer
+  // function at every distance from it. Skipping one that reaches a single
+  // opaque entry would drop samples of opacity 1: the images would differ.
+  test::GpuTestScope scope;
+  DenseVolume ball;
+  ball.dims = {64, 64, 64};
+  ball.data.resize(ball.voxel_count());
+  size_t i = 0;
+  for (uint32_t z = 0; z < 64; ++z)
+    for (uint32_t y = 0; y < 64; ++y)
+      for (uint32_t x = 0; x < 64; ++x, ++i) {
+        const double r = std::sqrt((x - 31.5) * (x - 31.5) + (y - 31.5) * (y - 31.5) + (z - 31.5) * (z - 31.5));
+        ball.data[i] = static_cast<uint8_t>(std::clamp(255.0 * (1.0 - r / 30.0), 0.0, 255.0));
+      }
+  auto src = DenseChunkSource::create({ball}, 32, 2);
+  REQUIRE(src.is_ok());
+  auto made = BrickRenderer::create(test::gpu_context(), **src, {});
+  REQUIRE(made.is_ok());
+  BrickRenderer& r = **made;
+  const Camera cam = orbit_camera(r.placement(), 30, 25, 1.3);
+  for (double threshold : {0.2, 0.5, 0.73}) {
+    RenderSettings s;
+    s.channels[0].colormap = "magma";
+    s.channels[0].window_lo = 0;
+    s.channels[0].window_hi = 255;
+    s.channels[0].opacity_points = {{0.0, 0.0}, {threshold, 0.0}, {threshold + 0.002, 1.0}, {1.0, 1.0}};
+    s.step_voxels = 0.5;
+    s.density = 0.4;
+    BrickFrameSettings f;
+    BrickFrameStats on, off;
+    const ImageRgba8 a = converge(r, cam, s, f, 72, 72, &on);
+    f.lod.skip_empty = false;
+    const ImageRgba8 b = converge(r, cam, s, f, 72, 72, &off);
+    const std::string what = "threshold " + std::to_string(threshold) + ": samples " + std::to_string(on.samples) +
+                             " vs " + std::to_string(off.samples);
+    INFO(what);
+    CHECK(test::looks_non_blank(a));
+    CHECK(a.pixels == b.pixels);
+    CHECK(on.samples < off.samples);
+  }
+}
+
+TEST_CASE("empty-space cells: images with skipping on and off are bit-identical for every model that skips") {
+  test::GpuTestScope scope;
+  auto src = sparse_vessels(128);
+  BrickRendererOptions ro;
+  ro.pool.slots = {8, 8, 8};
+  auto made = BrickRenderer::create(test::gpu_context(), *src, ro);
+  REQUIRE(made.is_ok());
+  BrickRenderer& r = **made;
+  const Camera cam = orbit_camera(r.placement(), 30, 25, 1.25);
+  const OpticalModel models[] = {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
+                                 OpticalModel::kMinIp};
+  const BrickPassMode modes[] = {BrickPassMode::kMultipass, BrickPassMode::kTiled};
+  for (OpticalModel model : models) {
+    for (BrickPassMode mode : modes) {
+      RenderSettings s;
+      s.model = model;
+      s.channels[0].colormap = "hot";
+      // MinIP: a window inside the vessels' values, so the minimum is not the background.
+      s.channels[0].window_lo = model == OpticalModel::kMinIp ? 0 : 8;
+      s.channels[0].window_hi = 200;
+      s.step_voxels = 0.5;
+      s.density = 0.3;
+      BrickFrameSettings f;
+      f.lod.force_level = 0;
+      f.mode = mode;
+      BrickFrameStats cells_on, bricks_only, none;
+      const ImageRgba8 a = converge(r, cam, s, f, 96, 96, &cells_on);
+      f.skip_cells = false;
+      const ImageRgba8 b = converge(r, cam, s, f, 96, 96, &bricks_only);
+      f.lod.skip_empty = false;
+      const ImageRgba8 c = converge(r, cam, s, f, 96, 96, &none);
+      const std::string what = std::string(optical_model_name(model)) +
+                               (mode == BrickPassMode::kTiled ? " tiled" : " multipass") + ": samples cells " +
+                               std::to_string(cells_on.samples) + ", bricks only " +
+                               std::to_string(bricks_only.samples) + ", none " + std::to_string(none.samples);
+      INFO(what);
+      if (model != OpticalModel::kMinIp) CHECK(test::looks_non_blank(a));
+      CHECK(a.pixels == b.pixels);
+      CHECK(a.pixels == c.pixels);
+      CHECK(cells_on.samples < bricks_only.samples);
+      CHECK(bricks_only.samples <= none.samples);
+      MESSAGE(what);
+    }
+  }
+}
