@@ -215,6 +215,16 @@ nlohmann::json play(const std::string& input, const std::string& name, const std
   return nlohmann::json::parse(f);
 }
 
+// The 7-timepoint OME-TIFF as a container (what vxr play streams per timepoint).
+std::string imported_time_series(const std::string& name) {
+  const std::filesystem::path dir = vxr::test::scratch_dir("playback", name + "_input");
+  const std::string tif = std::string(VXR_TESTDATA_DIR) + "/ome-tiff/multi-channel-time-series.ome.tif";
+  const auto out = (dir / "ts.vxc").string();
+  const auto run = vxr::test::run_vxr("import " + vxr::test::shell_quote(tif) + " -o " + vxr::test::shell_quote(out), dir, 300);
+  REQUIRE_MESSAGE(run.rc == 0, run.err);
+  return out;
+}
+
 // The shown timepoints split into loops; each strictly increasing.
 std::vector<std::vector<uint32_t>> loops_of(const nlohmann::json& doc) {
   std::vector<std::vector<uint32_t>> loops(1);
@@ -229,8 +239,7 @@ std::vector<std::vector<uint32_t>> loops_of(const nlohmann::json& doc) {
 }  // namespace
 
 TEST_CASE("play headless: a slow renderer drops timepoints, never repeats or reorders (OME-TIFF, 7 timepoints)") {
-  const std::string input = std::string(VXR_TESTDATA_DIR) + "/ome-tiff/multi-channel-time-series.ome.tif";
-  const auto doc = play(input, "slow", "--fps 20 --frame-delay-ms 120");
+  const auto doc = play(imported_time_series("slow"), "slow", "--fps 20 --frame-delay-ms 120");
   REQUIRE(doc["timepoints"].get<uint32_t>() == 7);
   const auto loops = loops_of(doc);
   REQUIRE(loops.size() == 1);
@@ -246,8 +255,7 @@ TEST_CASE("play headless: a slow renderer drops timepoints, never repeats or reo
 }
 
 TEST_CASE("play headless: looping plays in order within every loop") {
-  const std::string input = std::string(VXR_TESTDATA_DIR) + "/ome-tiff/multi-channel-time-series.ome.tif";
-  const auto doc = play(input, "loop", "--fps 50 --loop --frames 40 --frame-delay-ms 30");
+  const auto doc = play(imported_time_series("loop"), "loop", "--fps 50 --loop --frames 40 --frame-delay-ms 30");
   const auto loops = loops_of(doc);
   CHECK(loops.size() >= 2);
   CHECK(doc["loops"].get<uint64_t>() >= loops.size() - 1);  // a very slow frame may skip a whole loop

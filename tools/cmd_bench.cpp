@@ -3,6 +3,10 @@
 #include "bench/bench.h"
 #include "command.h"
 
+namespace vxr::bench {
+void add_movie_bench(CLI::App& bench, cli::Invocation& inv);  // bench_movie.cpp
+}
+
 namespace vxr::cli {
 
 void add_bench_command(CLI::App& app, Invocation& inv) {

@@ -35,6 +35,8 @@ struct PlayOptions {
 
 int run_play(const PlayOptions& o) {
   if (!o.headless) return fail(invalid_argument("vxr play: only --headless playback is available; use vxr view to look"), kExitUsage);
+  std::error_code dir_error;
+  std::filesystem::create_directories(o.out_dir, dir_error);  // --out names a folder: made if missing
   if (Status s = check_output((std::filesystem::path(o.out_dir) / "play.json").string(), {}); !s) return fail(s, kExitUsage);
   auto session = open_volume_session(o.input, o.session);
   if (!session) return fail(session.status());

@@ -35,7 +35,6 @@ void add_annotate_command(CLI::App& app, Invocation& inv);
 void add_cards_command(CLI::App& app, Invocation& inv);
 void add_project_command(CLI::App& app, Invocation& inv);
 void add_catalog_command(CLI::App& app, Invocation& inv);
-void add_play_command(CLI::App& app, Invocation& inv);
 
 // `vxr import INPUTS -o OUTPUT` with the default options (what `vxr project
 // create` runs); prints as `vxr import` does and returns its exit code.

@@ -27,6 +27,10 @@ bool has_subcommand(const CLI::App& app, const std::string& name) {
 }
 }  // namespace
 
+namespace vxr::cli {
+void add_play_command(CLI::App& app, Invocation& inv);  // tools/cmd_play.cpp
+}
+
 int run_vxr(int argc, char** argv) {
   using namespace vxr::cli;
   CLI::App app{"vxr: explore very large multidimensional images in OpenXR, a desktop window, or headless"};

@@ -44,6 +44,5 @@ void add_synth_tiff_bench(CLI::App& bench, cli::Invocation& inv);
 void add_stability_bench(CLI::App& bench, cli::Invocation& inv);
 void add_accuracy_bench(CLI::App& bench, cli::Invocation& inv);
 void add_peer_bench(CLI::App& bench, cli::Invocation& inv);
-void add_movie_bench(CLI::App& bench, cli::Invocation& inv);
 
 }  // namespace vxr::bench
