@@ -67,7 +67,13 @@ Result<ObjResult> parse_obj(const std::string& text, const std::string& source, 
   uint32_t material = 0;
   int current_object = -1;
   auto open_part = [&](std::string name, int parent) {
-    if (!m.parts.empty() && m.parts.back().triangle_count == 0 && m.parts.back().name.empty()) m.parts.pop_back();
+    // An unnamed part that got no faces is dropped; a part opened under it hangs where it would have.
+    if (!m.parts.empty() && m.parts.back().triangle_count == 0 && m.parts.back().name.empty()) {
+      const int dropped = int(m.parts.size()) - 1;
+      if (parent == dropped) parent = m.parts.back().parent;
+      if (current_object == dropped) current_object = -1;
+      m.parts.pop_back();
+    }
     m.parts.push_back({std::move(name), parent, uint32_t(m.triangles.size()), 0});
     return int(m.parts.size()) - 1;
   };
@@ -142,7 +148,8 @@ Result<ObjResult> parse_obj(const std::string& text, const std::string& source, 
     }
   }
   if (m.triangles.empty()) return corrupt(source + ": has no faces to draw");
-  std::erase_if(m.parts, [](const MeshPart& p) { return p.triangle_count == 0 && p.name.empty(); });
+  // A trailing unnamed part with no faces says nothing (parents come before their children, so it has none).
+  if (!m.parts.empty() && m.parts.back().triangle_count == 0 && m.parts.back().name.empty()) m.parts.pop_back();
   return r;
 }
 

@@ -17,6 +17,7 @@
 
 #include "core/image.h"
 #include "gpu/vk_check.h"
+#include "xr/desktop/viewer_keys.h"
 #include "xr/eye_renderer.h"
 #include "xr/volume_transform.h"
 
@@ -66,6 +67,10 @@ Result<std::unique_ptr<DesktopTarget>> DesktopTarget::create(const DesktopOption
     g_last_y = y;
   });
   glfwSetScrollCallback(t->window_, [](GLFWwindow* win, double, double dy) { self(win)->on_scroll(dy); });
+  // Esc through the key callback: polling glfwGetKey once a frame misses a tap shorter than a frame.
+  glfwSetKeyCallback(t->window_, [](GLFWwindow* win, int key, int, int action, int) {
+    if (viewer_key_from_glfw(key, action) == ViewerKey::kQuit) glfwSetWindowShouldClose(win, GLFW_TRUE);
+  });
   return t;
 }
 

@@ -1,0 +1,266 @@
+// The desktop viewer's UI model: every edit lands in the Scene/RenderSettings
+// the renderer takes, bad edits are refused without changing anything, and the
+// navigation camera keeps its invariants.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include <GLFW/glfw3.h>
+
+#include <imgui.h>
+
+#include "xr/desktop/viewer_keys.h"
+#include "xr/desktop/viewer_panels.h"
+#include "xr/desktop/viewer_state.h"
+
+using namespace vxr;
+using namespace vxr::xr;
+
+namespace {
+ViewerState two_channels(uint32_t timepoints = 3) {
+  Scene s;
+  s.render.channels.resize(2);
+  return ViewerState(s, timepoints, {0, 4095});
+}
+double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+double dist(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  const std::array<double, 3> d{a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+  return std::sqrt(dot(d, d));
+}
+}  // namespace
+
+TEST_CASE("viewer state: channel edits reach the render settings and bump the revision") {
+  ViewerState v = two_channels();
+  const uint64_t r0 = v.revision();
+  REQUIRE(v.set_colormap(1, "viridis").is_ok());
+  CHECK(v.render().channels[1].colormap == "viridis");
+  CHECK(v.render().channels[0].colormap == "gray");
+  CHECK(v.revision() == r0 + 1);
+  REQUIRE(v.set_colormap(1, "viridis").is_ok());
+  CHECK(v.revision() == r0 + 1);  // no change, no re-upload
+  REQUIRE(v.set_window(0, 100, 900).is_ok());
+  CHECK(v.render().channels[0].window_lo == 100);
+  CHECK(v.render().channels[0].window_hi == 900);
+  REQUIRE(v.set_window_level(0, 2000, 1000).is_ok());
+  CHECK(v.render().channels[0].window_lo == 1500);
+  CHECK(v.render().channels[0].window_hi == 2500);
+  REQUIRE(v.set_channel_visible(1, false).is_ok());
+  CHECK_FALSE(v.render().channels[1].enabled);
+  REQUIRE(v.set_step(0.25).is_ok());
+  CHECK(v.render().step_voxels == 0.25);
+  v.set_model(OpticalModel::kMip);
+  CHECK(v.render().model == OpticalModel::kMip);
+  REQUIRE(v.set_timepoint(2).is_ok());
+  CHECK(v.scene().timepoint == 2);
+}
+
+TEST_CASE("viewer state: bad edits are refused and change nothing") {
+  ViewerState v = two_channels();
+  const Scene before = v.scene();
+  const uint64_t r0 = v.revision();
+  CHECK(v.set_colormap(0, "no-such-map").code() == ErrorCode::kInvalidArgument);
+  CHECK(v.set_colormap(2, "gray").code() == ErrorCode::kOutOfRange);
+  CHECK(v.set_window(0, 5, 5).code() == ErrorCode::kInvalidArgument);
+  CHECK(v.set_window(0, 9, 1).code() == ErrorCode::kInvalidArgument);
+  CHECK(v.set_window(0, 0, NAN).code() == ErrorCode::kInvalidArgument);
+  CHECK(v.set_window_level(0, 10, 0).code() == ErrorCode::kInvalidArgument);
+  CHECK(v.set_step(0).code() == ErrorCode::kInvalidArgument);
+  CHECK(v.set_step(100).code() == ErrorCode::kInvalidArgument);
+  CHECK(v.set_timepoint(3).code() == ErrorCode::kOutOfRange);
+  CHECK(v.set_gamma(0, -1).code() == ErrorCode::kInvalidArgument);
+  CHECK(v.scene() == before);
+  CHECK(v.revision() == r0);
+}
+
+TEST_CASE("viewer state: choosing a colour map drops explicit colour points") {
+  Scene s;
+  s.render.channels[0].color_points = {{0, {1, 0, 0}}, {1, {0, 0, 1}}};
+  ViewerState v(s, 1, {0, 255});
+  REQUIRE(v.set_colormap(0, "gray").is_ok());
+  CHECK(v.render().channels[0].color_points.empty());
+}
+
+TEST_CASE("viewer state: cycling models and colour maps visits every one and wraps") {
+  ViewerState v = two_channels();
+  const OpticalModel first = v.render().model;
+  int steps = 0;
+  do {
+    v.cycle_model(1);
+    ++steps;
+  } while (v.render().model != first && steps < 100);
+  CHECK(steps == 6);
+  v.cycle_model(-1);
+  CHECK(v.render().model == OpticalModel::kIsosurface);
+
+  REQUIRE(v.set_colormap(0, "viridis").is_ok());
+  REQUIRE(v.cycle_colormap(0, 1).is_ok());
+  const std::string next = v.render().channels[0].colormap;
+  CHECK(next != "viridis");
+  REQUIRE(v.cycle_colormap(0, -1).is_ok());
+  CHECK(v.render().channels[0].colormap == "viridis");
+}
+
+TEST_CASE("viewer state: orbit keeps the distance, the up vector orthogonal and the pitch bounded") {
+  ViewerState v = two_channels();
+  const CameraState home = v.camera();
+  const double d0 = dist(home.eye, home.target);
+  v.orbit_drag(120, 45);
+  const CameraState c = v.camera();
+  CHECK(dist(c.eye, c.target) == doctest::Approx(d0));
+  const std::array<double, 3> fwd{c.target[0] - c.eye[0], c.target[1] - c.eye[1], c.target[2] - c.eye[2]};
+  CHECK(dot(fwd, c.up) == doctest::Approx(0).epsilon(1e-9));
+  CHECK(dist(c.eye, home.eye) > 0.1);
+  v.orbit_drag(0, 1e6);  // past the pole: clamped, never flips
+  CHECK(v.orbit().pitch < 3.14159265 / 2);
+  v.reset_view();
+  CHECK(v.camera() == home);
+}
+
+TEST_CASE("viewer state: zoom moves toward the focus, pan moves the focus across the view") {
+  ViewerState v = two_channels();
+  const double d0 = v.orbit().distance;
+  v.zoom(3);
+  CHECK(v.orbit().distance < d0);
+  v.zoom(-3);
+  CHECK(v.orbit().distance == doctest::Approx(d0));
+  v.pan_drag(100, 0, 800);  // drag right: the scene follows, the focus moves to -x (camera on +z)
+  CHECK(v.orbit().focus[0] < 0);
+  CHECK(v.orbit().focus[1] == doctest::Approx(0));
+}
+
+TEST_CASE("viewer state: axis views look along each axis at the volume centre") {
+  ViewerState v = two_channels();
+  for (int axis = 0; axis < 3; ++axis) {
+    v.orbit_drag(77, 13);
+    REQUIRE(v.axis_view(axis).is_ok());
+    const CameraState c = v.camera();
+    std::array<double, 3> dir{c.eye[0] - c.target[0], c.eye[1] - c.target[1], c.eye[2] - c.target[2]};
+    const double n = std::sqrt(dot(dir, dir));
+    CHECK(dir[axis] / n == doctest::Approx(1).epsilon(1e-3));
+    CHECK(dist(c.target, {0, 0, 0}) == doctest::Approx(0));
+  }
+  CHECK(v.axis_view(3).code() == ErrorCode::kInvalidArgument);
+}
+
+TEST_CASE("viewer state: keys step time within range and record toggles") {
+  ViewerState v = two_channels(2);
+  v.handle_key(ViewerKey::kTimePrev);
+  CHECK(v.scene().timepoint == 0);
+  v.handle_key(ViewerKey::kTimeNext);
+  v.handle_key(ViewerKey::kTimeNext);
+  CHECK(v.scene().timepoint == 1);
+  CHECK_FALSE(v.help_visible());
+  v.handle_key(ViewerKey::kToggleHelp);
+  CHECK(v.help_visible());
+  CHECK_FALSE(v.quit_requested());
+  v.handle_key(ViewerKey::kQuit);
+  CHECK(v.quit_requested());
+  CHECK(viewer_shortcuts().size() >= 8);
+}
+
+TEST_CASE("viewer state: script commands drive the same edits and bad lines are named") {
+  ViewerState v = two_channels();
+  REQUIRE(v.apply_command("colormap 1 magma").is_ok());
+  REQUIRE(v.apply_command("window 0 10 200").is_ok());
+  REQUIRE(v.apply_command("model mip").is_ok());
+  REQUIRE(v.apply_command("step 0.125").is_ok());
+  REQUIRE(v.apply_command("time 1").is_ok());
+  REQUIRE(v.apply_command("visible 0 off").is_ok());
+  REQUIRE(v.apply_command("  # a comment").is_ok());
+  REQUIRE(v.apply_command("view 2").is_ok());
+  CHECK(v.render().channels[1].colormap == "magma");
+  CHECK(v.render().channels[0].window_hi == 200);
+  CHECK(v.render().model == OpticalModel::kMip);
+  CHECK(v.render().step_voxels == 0.125);
+  CHECK(v.scene().timepoint == 1);
+  CHECK_FALSE(v.render().channels[0].enabled);
+  const Scene before = v.scene();
+  for (const char* line : {"window 0 10", "window 0 x 3", "colormap 0 nope", "model fancy", "frobnicate 1",
+                           "time -1", "view 4", "visible 0 maybe", "step 1e999"}) {
+    const Status s = v.apply_command(line);
+    CAPTURE(line);
+    CHECK(s.code() == ErrorCode::kInvalidArgument);
+    CHECK(s.message().find(line) != std::string::npos);
+  }
+  CHECK(v.scene() == before);
+}
+
+TEST_CASE("viewer state: window geometry round-trips and a malformed file is refused") {
+  const std::filesystem::path dir = std::filesystem::path(VXR_TEST_OUT_DIR) / "viewer_state_config";
+  std::filesystem::remove_all(dir);
+  const std::string path = (dir / "vxr" / "desktop.json").string();
+  auto first = load_window_geometry(path);
+  REQUIRE(first.is_ok());
+  CHECK(first.value() == WindowGeometry{});
+  REQUIRE(save_window_geometry(path, {1600, 900}).is_ok());
+  auto back = load_window_geometry(path);
+  REQUIRE(back.is_ok());
+  CHECK(back.value() == WindowGeometry{1600, 900});
+  std::ofstream(path) << "{\"width\": -3}";
+  CHECK(load_window_geometry(path).status().code() == ErrorCode::kInvalidArgument);
+  std::ofstream(path) << "not json";
+  CHECK(load_window_geometry(path).status().code() == ErrorCode::kInvalidArgument);
+
+  const char* old = std::getenv("XDG_CONFIG_HOME");
+  const std::string saved = old ? old : "";
+  setenv("XDG_CONFIG_HOME", dir.c_str(), 1);
+  CHECK(viewer_config_path() == path);
+  if (old)
+    setenv("XDG_CONFIG_HOME", saved.c_str(), 1);
+  else
+    unsetenv("XDG_CONFIG_HOME");
+}
+
+TEST_CASE("viewer keys: GLFW presses map to viewer keys, releases and repeats of toggles do not") {
+  CHECK(viewer_key_from_glfw(GLFW_KEY_ESCAPE, GLFW_PRESS) == ViewerKey::kQuit);
+  CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_ESCAPE, GLFW_RELEASE).has_value());
+  CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_ESCAPE, GLFW_REPEAT).has_value());
+  CHECK(viewer_key_from_glfw(GLFW_KEY_R, GLFW_PRESS) == ViewerKey::kResetView);
+  CHECK(viewer_key_from_glfw(GLFW_KEY_2, GLFW_PRESS) == ViewerKey::kAxisY);
+  CHECK(viewer_key_from_glfw(GLFW_KEY_RIGHT, GLFW_REPEAT) == ViewerKey::kTimeNext);
+  CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_H, GLFW_REPEAT).has_value());
+  CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_Z, GLFW_PRESS).has_value());
+}
+
+namespace {
+// One headless ImGui frame (no backend: the font atlas is built but never uploaded).
+int panel_vertices(ViewerState& state) {
+  ImGuiIO& io = ImGui::GetIO();
+  io.DisplaySize = ImVec2(1280, 800);
+  io.DeltaTime = 1.0f / 60;
+  unsigned char* pixels = nullptr;
+  int w = 0, h = 0;
+  io.Fonts->GetTexDataAsRGBA32(&pixels, &w, &h);
+  ImGui::NewFrame();
+  PanelInputs in;
+  in.dataset = "test.zarr";
+  in.histograms = {std::vector<float>(64, 1.0f)};
+  draw_viewer_panels(state, in);
+  ImGui::Render();
+  return ImGui::GetDrawData()->TotalVtxCount;
+}
+}  // namespace
+
+TEST_CASE("viewer panels: draw without touching the state, the help panel adds, Tab hides all") {
+  ImGuiContext* ctx = ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;
+  ViewerState v = two_channels(4);
+  const uint64_t r0 = v.revision();
+  panel_vertices(v);  // first frame lays the windows out
+  const int panels = panel_vertices(v);
+  CHECK(panels > 0);
+  CHECK(v.revision() == r0);
+  v.handle_key(ViewerKey::kToggleHelp);
+  panel_vertices(v);  // a new auto-sized window stays hidden for its first frame
+  const int with_help = panel_vertices(v);
+  CHECK(with_help > panels);
+  v.handle_key(ViewerKey::kToggleUi);
+  CHECK(panel_vertices(v) == 0);
+  ImGui::DestroyContext(ctx);
+  CHECK(viewer_window_title("head.zarr", 12.345) == "vxr - head.zarr - 12.3 ms");
+}

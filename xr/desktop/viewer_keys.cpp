@@ -1,0 +1,28 @@
+#include "xr/desktop/viewer_keys.h"
+
+#include <GLFW/glfw3.h>
+
+namespace vxr::xr {
+
+std::optional<ViewerKey> viewer_key_from_glfw(int key, int action) {
+  if (action != GLFW_PRESS && action != GLFW_REPEAT) return std::nullopt;
+  // Toggles and quit act once per press, not on auto-repeat.
+  const bool repeat = action == GLFW_REPEAT;
+  switch (key) {
+    case GLFW_KEY_ESCAPE: return repeat ? std::nullopt : std::optional(ViewerKey::kQuit);
+    case GLFW_KEY_R: return ViewerKey::kResetView;
+    case GLFW_KEY_1: return ViewerKey::kAxisX;
+    case GLFW_KEY_2: return ViewerKey::kAxisY;
+    case GLFW_KEY_3: return ViewerKey::kAxisZ;
+    case GLFW_KEY_M: return repeat ? std::nullopt : std::optional(ViewerKey::kNextModel);
+    case GLFW_KEY_C: return repeat ? std::nullopt : std::optional(ViewerKey::kNextColormap);
+    case GLFW_KEY_RIGHT: return ViewerKey::kTimeNext;
+    case GLFW_KEY_LEFT: return ViewerKey::kTimePrev;
+    case GLFW_KEY_H:
+    case GLFW_KEY_F1: return repeat ? std::nullopt : std::optional(ViewerKey::kToggleHelp);
+    case GLFW_KEY_TAB: return repeat ? std::nullopt : std::optional(ViewerKey::kToggleUi);
+    default: return std::nullopt;
+  }
+}
+
+}  // namespace vxr::xr

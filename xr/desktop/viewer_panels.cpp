@@ -1,0 +1,93 @@
+#include "xr/desktop/viewer_panels.h"
+
+#include <imgui.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <cstdio>
+
+#include "render/colormap.h"
+
+namespace vxr::xr {
+namespace {
+
+constexpr const char* kModelLabels[] = {"emission-absorption", "emission", "MIP", "MinIP", "average", "isosurface"};
+constexpr OpticalModel kModelOrder[] = {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
+                                        OpticalModel::kMinIp, OpticalModel::kAverage, OpticalModel::kIsosurface};
+
+void channel_panel(ViewerState& state, const PanelInputs& in) {
+  const std::vector<std::string> maps = colormap_names();
+  const auto range = state.data_range();
+  for (size_t c = 0; c < state.channel_count(); ++c) {
+    const ChannelSettings& ch = state.render().channels[c];
+    ImGui::PushID(static_cast<int>(c));
+    bool visible = ch.enabled;
+    if (ImGui::Checkbox(("channel " + std::to_string(c)).c_str(), &visible)) (void)state.set_channel_visible(c, visible);
+    if (ImGui::BeginCombo("colour map", ch.colormap.c_str())) {
+      for (const std::string& name : maps)
+        if (ImGui::Selectable(name.c_str(), name == ch.colormap)) (void)state.set_colormap(c, name);
+      ImGui::EndCombo();
+    }
+    if (c < in.histograms.size() && !in.histograms[c].empty())
+      ImGui::PlotHistogram("##histogram", in.histograms[c].data(), static_cast<int>(in.histograms[c].size()), 0,
+                           nullptr, 0.0f, FLT_MAX, ImVec2(0, 48));
+    float lo = static_cast<float>(ch.window_lo), hi = static_cast<float>(ch.window_hi);
+    // A range drag; set_window refuses an empty window, so the old one stays.
+    if (ImGui::DragFloatRange2("window", &lo, &hi, static_cast<float>((range[1] - range[0]) / 500.0),
+                               static_cast<float>(range[0]), static_cast<float>(range[1])))
+      (void)state.set_window(c, lo, hi);
+    float gamma = static_cast<float>(ch.gamma);
+    if (ImGui::SliderFloat("gamma", &gamma, 0.1f, 5.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
+      (void)state.set_gamma(c, gamma);
+    ImGui::PopID();
+    ImGui::Separator();
+  }
+}
+
+void render_panel(ViewerState& state) {
+  int model = 0;
+  for (int i = 0; i < int(std::size(kModelOrder)); ++i)
+    if (kModelOrder[i] == state.render().model) model = i;
+  if (ImGui::Combo("model", &model, kModelLabels, int(std::size(kModelLabels)))) state.set_model(kModelOrder[model]);
+  float step = static_cast<float>(state.render().step_voxels);
+  if (ImGui::SliderFloat("step (voxels)", &step, 1.0f / 64, 8.0f, "%.3f", ImGuiSliderFlags_Logarithmic))
+    (void)state.set_step(step);
+  float density = static_cast<float>(state.render().density);
+  if (ImGui::SliderFloat("density", &density, 0.001f, 10.0f, "%.3f", ImGuiSliderFlags_Logarithmic))
+    (void)state.set_density(density);
+  if (state.timepoints() > 1) {
+    int t = static_cast<int>(state.scene().timepoint);
+    if (ImGui::SliderInt("time", &t, 0, static_cast<int>(state.timepoints()) - 1))
+      (void)state.set_timepoint(static_cast<uint32_t>(t));
+  }
+}
+
+}  // namespace
+
+std::string viewer_window_title(const std::string& dataset, double frame_ms) {
+  char ms[32];
+  std::snprintf(ms, sizeof ms, "%.1f ms", frame_ms);
+  return "vxr - " + (dataset.empty() ? std::string("(no data)") : dataset) + " - " + ms;
+}
+
+void draw_viewer_panels(ViewerState& state, const PanelInputs& in) {
+  if (!state.ui_visible()) return;
+  ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
+  if (ImGui::Begin("Channels")) {
+    if (!in.dataset.empty()) ImGui::TextUnformatted(in.dataset.c_str());
+    channel_panel(state, in);
+  }
+  ImGui::End();
+  ImGui::SetNextWindowPos(ImVec2(10, 420), ImGuiCond_FirstUseEver);
+  if (ImGui::Begin("Rendering")) render_panel(state);
+  ImGui::End();
+  if (state.help_visible()) {
+    if (ImGui::Begin("Help")) {
+      for (const ShortcutHelp& s : viewer_shortcuts()) ImGui::BulletText("%s: %s", s.keys, s.action);
+    }
+    ImGui::End();
+  }
+}
+
+}  // namespace vxr::xr

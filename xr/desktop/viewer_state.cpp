@@ -1,0 +1,360 @@
+#include "xr/desktop/viewer_state.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/output_file.h"
+#include "render/colormap.h"
+
+namespace vxr::xr {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kMaxPitch = kPi / 2 - 1e-3;
+constexpr double kRadiansPerPixel = 0.01;
+constexpr double kZoomPerTick = 0.9;  // distance factor per wheel notch toward the focus
+
+constexpr OpticalModel kModels[] = {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
+                                    OpticalModel::kMinIp, OpticalModel::kAverage, OpticalModel::kIsosurface};
+
+bool parse_double(const std::string& s, double* out) {
+  char* end = nullptr;
+  *out = std::strtod(s.c_str(), &end);
+  return !s.empty() && end == s.c_str() + s.size() && std::isfinite(*out);
+}
+bool parse_index(const std::string& s, size_t* out) {
+  if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 9) return false;
+  *out = std::stoul(s);
+  return true;
+}
+
+}  // namespace
+
+CameraState OrbitCamera::camera() const {
+  // Eye on a sphere about the focus; yaw 0, pitch 0 looks along -z.
+  const double cp = std::cos(pitch), sp = std::sin(pitch), cy = std::cos(yaw), sy = std::sin(yaw);
+  const std::array<double, 3> back{sy * cp, sp, cy * cp};  // focus -> eye
+  CameraState c;
+  for (int i = 0; i < 3; ++i) {
+    c.eye[i] = focus[i] + distance * back[i];
+    c.target[i] = focus[i];
+  }
+  c.up = {-sy * sp, cp, -cy * sp};  // d(back)/d(pitch): orthogonal to the view direction
+  c.fov_y_deg = fov_y_deg;
+  return c;
+}
+
+const std::vector<ShortcutHelp>& viewer_shortcuts() {
+  static const std::vector<ShortcutHelp> table = {
+      {"Left drag", "orbit"},           {"Right / middle drag", "pan"},
+      {"Wheel", "zoom"},                {"R", "reset view"},
+      {"1 / 2 / 3", "view along x / y / z"}, {"M", "next optical model"},
+      {"C", "next colour map (channel 0)"},  {"Left / Right", "previous / next timepoint"},
+      {"H or F1", "show / hide this help"},  {"Tab", "show / hide the panels"},
+      {"Esc", "quit"},
+  };
+  return table;
+}
+
+ViewerState::ViewerState(Scene scene, uint32_t timepoints, std::array<double, 2> data_range)
+    : scene_(std::move(scene)), timepoints_(std::max<uint32_t>(timepoints, 1)), data_range_(data_range) {
+  if (scene_.render.channels.empty()) scene_.render.channels.emplace_back();
+  if (!(data_range_[1] > data_range_[0])) data_range_ = {data_range_[0], data_range_[0] + 1.0};
+  // The whole volume (longest side 1 in world units) fits the view.
+  home_.fov_y_deg = scene_.has_camera ? scene_.camera.fov_y_deg : home_.fov_y_deg;
+  home_.distance = 0.75 / std::tan(home_.fov_y_deg * kPi / 360.0);
+  orbit_ = home_;
+  scene_.timepoint = std::min(scene_.timepoint, timepoints_ - 1);
+}
+
+Status ViewerState::check_channel(size_t channel) const {
+  if (channel >= scene_.render.channels.size())
+    return out_of_range("channel " + std::to_string(channel) + " does not exist (" +
+                        std::to_string(scene_.render.channels.size()) + " channels)");
+  return Status::ok();
+}
+
+Status ViewerState::set_channel_visible(size_t channel, bool visible) {
+  VXR_RETURN_IF_ERROR(check_channel(channel));
+  auto& ch = scene_.render.channels[channel];
+  if (ch.enabled != visible) {
+    ch.enabled = visible;
+    changed();
+  }
+  return Status::ok();
+}
+
+Status ViewerState::set_colormap(size_t channel, const std::string& name) {
+  VXR_RETURN_IF_ERROR(check_channel(channel));
+  if (!find_colormap(name)) return invalid_argument("unknown colour map '" + name + "'");
+  auto& ch = scene_.render.channels[channel];
+  // Explicit colour points override the map; choosing a map drops them.
+  if (ch.colormap != name || !ch.color_points.empty()) {
+    ch.colormap = name;
+    ch.color_points.clear();
+    changed();
+  }
+  return Status::ok();
+}
+
+Status ViewerState::cycle_colormap(size_t channel, int direction) {
+  VXR_RETURN_IF_ERROR(check_channel(channel));
+  const std::vector<std::string> names = colormap_names();
+  if (names.empty()) return internal_error("no colour maps");
+  auto it = std::find(names.begin(), names.end(), scene_.render.channels[channel].colormap);
+  const long n = static_cast<long>(names.size());
+  const long at = it == names.end() ? -1 : static_cast<long>(it - names.begin());
+  const long next = ((at + (direction >= 0 ? 1 : -1)) % n + n) % n;
+  return set_colormap(channel, names[static_cast<size_t>(next)]);
+}
+
+Status ViewerState::set_window(size_t channel, double lo, double hi) {
+  VXR_RETURN_IF_ERROR(check_channel(channel));
+  if (!std::isfinite(lo) || !std::isfinite(hi) || !(hi > lo))
+    return invalid_argument("window needs lo < hi (got " + std::to_string(lo) + ", " + std::to_string(hi) + ")");
+  auto& ch = scene_.render.channels[channel];
+  if (ch.window_lo != lo || ch.window_hi != hi) {
+    ch.window_lo = lo;
+    ch.window_hi = hi;
+    changed();
+  }
+  return Status::ok();
+}
+
+Status ViewerState::set_window_level(size_t channel, double level, double width) {
+  if (!(width > 0)) return invalid_argument("window width must be > 0");
+  return set_window(channel, level - width / 2, level + width / 2);
+}
+
+Status ViewerState::set_gamma(size_t channel, double gamma) {
+  VXR_RETURN_IF_ERROR(check_channel(channel));
+  if (!(gamma > 0) || !std::isfinite(gamma)) return invalid_argument("gamma must be > 0");
+  auto& ch = scene_.render.channels[channel];
+  if (ch.gamma != gamma) {
+    ch.gamma = gamma;
+    changed();
+  }
+  return Status::ok();
+}
+
+void ViewerState::set_model(OpticalModel model) {
+  if (scene_.render.model != model) {
+    scene_.render.model = model;
+    changed();
+  }
+}
+
+void ViewerState::cycle_model(int direction) {
+  const long n = static_cast<long>(std::size(kModels));
+  long at = 0;
+  for (long i = 0; i < n; ++i)
+    if (kModels[i] == scene_.render.model) at = i;
+  set_model(kModels[((at + (direction >= 0 ? 1 : -1)) % n + n) % n]);
+}
+
+Status ViewerState::set_step(double step_voxels) {
+  // Below 1/64 voxel the ray march costs without changing the picture.
+  if (!std::isfinite(step_voxels) || step_voxels < 1.0 / 64 || step_voxels > 8)
+    return invalid_argument("step must be in [1/64, 8] voxels");
+  if (scene_.render.step_voxels != step_voxels) {
+    scene_.render.step_voxels = step_voxels;
+    changed();
+  }
+  return Status::ok();
+}
+
+Status ViewerState::set_density(double density) {
+  if (!std::isfinite(density) || density <= 0) return invalid_argument("density must be > 0");
+  if (scene_.render.density != density) {
+    scene_.render.density = density;
+    changed();
+  }
+  return Status::ok();
+}
+
+Status ViewerState::set_timepoint(uint32_t t) {
+  if (t >= timepoints_)
+    return out_of_range("timepoint " + std::to_string(t) + " does not exist (" + std::to_string(timepoints_) +
+                        " timepoints)");
+  if (scene_.timepoint != t) {
+    scene_.timepoint = t;
+    changed();
+  }
+  return Status::ok();
+}
+
+void ViewerState::orbit_drag(double dx_px, double dy_px) {
+  orbit_.yaw = std::remainder(orbit_.yaw - dx_px * kRadiansPerPixel, 2 * kPi);
+  orbit_.pitch = std::clamp(orbit_.pitch + dy_px * kRadiansPerPixel, -kMaxPitch, kMaxPitch);
+  changed();
+}
+
+void ViewerState::pan_drag(double dx_px, double dy_px, double view_height_px) {
+  if (!(view_height_px > 0)) return;
+  // World units per pixel at the focus distance: the focus follows the cursor.
+  const double per_px = 2 * orbit_.distance * std::tan(orbit_.fov_y_deg * kPi / 360.0) / view_height_px;
+  const CameraState c = orbit_.camera();
+  std::array<double, 3> fwd, right;
+  for (int i = 0; i < 3; ++i) fwd[i] = (c.target[i] - c.eye[i]) / orbit_.distance;
+  right = {fwd[1] * c.up[2] - fwd[2] * c.up[1], fwd[2] * c.up[0] - fwd[0] * c.up[2],
+           fwd[0] * c.up[1] - fwd[1] * c.up[0]};
+  for (int i = 0; i < 3; ++i) orbit_.focus[i] += (-dx_px * right[i] + dy_px * c.up[i]) * per_px;
+  changed();
+}
+
+void ViewerState::zoom(double wheel_ticks) {
+  orbit_.distance = std::clamp(orbit_.distance * std::pow(kZoomPerTick, wheel_ticks), 0.01, 100.0);
+  changed();
+}
+
+void ViewerState::reset_view() {
+  orbit_ = home_;
+  changed();
+}
+
+Status ViewerState::axis_view(int axis) {
+  OrbitCamera o = home_;
+  switch (axis) {
+    case 0: o.yaw = kPi / 2; break;     // eye on +x
+    case 1: o.pitch = kMaxPitch; break;  // eye above, on +y
+    case 2: break;                       // eye on +z
+    default: return invalid_argument("axis view needs 1, 2 or 3");
+  }
+  orbit_ = o;
+  changed();
+  return Status::ok();
+}
+
+void ViewerState::handle_key(ViewerKey key) {
+  switch (key) {
+    case ViewerKey::kResetView: reset_view(); break;
+    case ViewerKey::kAxisX: (void)axis_view(0); break;
+    case ViewerKey::kAxisY: (void)axis_view(1); break;
+    case ViewerKey::kAxisZ: (void)axis_view(2); break;
+    case ViewerKey::kNextModel: cycle_model(1); break;
+    case ViewerKey::kNextColormap: (void)cycle_colormap(0, 1); break;
+    case ViewerKey::kTimeNext:
+      if (scene_.timepoint + 1 < timepoints_) (void)set_timepoint(scene_.timepoint + 1);
+      break;
+    case ViewerKey::kTimePrev:
+      if (scene_.timepoint > 0) (void)set_timepoint(scene_.timepoint - 1);
+      break;
+    case ViewerKey::kToggleHelp: help_visible_ = !help_visible_; break;
+    case ViewerKey::kToggleUi: ui_visible_ = !ui_visible_; break;
+    case ViewerKey::kQuit: quit_requested_ = true; break;
+  }
+}
+
+Status ViewerState::apply_command(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> w;
+  for (std::string tok; in >> tok;) w.push_back(tok);
+  if (w.empty() || w[0][0] == '#') return Status::ok();
+  const std::string& cmd = w[0];
+  auto bad = [&](const std::string& why) { return invalid_argument("'" + line + "': " + why); };
+  auto wrap = [&](Status s) { return s.is_ok() ? s : bad(s.message()); };
+  auto need = [&](size_t n) { return w.size() == n + 1; };
+  size_t ch = 0;
+  double a = 0, b = 0;
+  if (cmd == "visible") {
+    if (!need(2) || !parse_index(w[1], &ch) || (w[2] != "on" && w[2] != "off")) return bad("usage: visible CH on|off");
+    return wrap(set_channel_visible(ch, w[2] == "on"));
+  }
+  if (cmd == "colormap") {
+    if (!need(2) || !parse_index(w[1], &ch)) return bad("usage: colormap CH NAME");
+    return wrap(set_colormap(ch, w[2]));
+  }
+  if (cmd == "window") {
+    if (!need(3) || !parse_index(w[1], &ch) || !parse_double(w[2], &a) || !parse_double(w[3], &b))
+      return bad("usage: window CH LO HI");
+    return wrap(set_window(ch, a, b));
+  }
+  if (cmd == "gamma") {
+    if (!need(2) || !parse_index(w[1], &ch) || !parse_double(w[2], &a)) return bad("usage: gamma CH G");
+    return wrap(set_gamma(ch, a));
+  }
+  if (cmd == "model") {
+    OpticalModel m;
+    if (!need(1) || !optical_model_from_name(w[1], &m)) return bad("usage: model ea|emission|mip|minip|average|iso");
+    set_model(m);
+    return Status::ok();
+  }
+  if (cmd == "step") {
+    if (!need(1) || !parse_double(w[1], &a)) return bad("usage: step VOXELS");
+    return wrap(set_step(a));
+  }
+  if (cmd == "density") {
+    if (!need(1) || !parse_double(w[1], &a)) return bad("usage: density D");
+    return wrap(set_density(a));
+  }
+  if (cmd == "time") {
+    if (!need(1) || !parse_index(w[1], &ch)) return bad("usage: time T");
+    return wrap(set_timepoint(static_cast<uint32_t>(ch)));
+  }
+  if (cmd == "orbit" || cmd == "pan") {
+    if (!need(2) || !parse_double(w[1], &a) || !parse_double(w[2], &b)) return bad("usage: " + cmd + " DX DY");
+    if (cmd == "orbit")
+      orbit_drag(a, b);
+    else
+      pan_drag(a, b, 800);
+    return Status::ok();
+  }
+  if (cmd == "zoom") {
+    if (!need(1) || !parse_double(w[1], &a)) return bad("usage: zoom TICKS");
+    zoom(a);
+    return Status::ok();
+  }
+  if (cmd == "reset") {
+    if (!need(0)) return bad("usage: reset");
+    reset_view();
+    return Status::ok();
+  }
+  if (cmd == "view") {
+    if (!need(1) || !parse_index(w[1], &ch) || ch < 1 || ch > 3) return bad("usage: view 1|2|3");
+    return axis_view(static_cast<int>(ch) - 1);
+  }
+  return bad("unknown command '" + cmd + "'");
+}
+
+std::string viewer_config_path() {
+  std::filesystem::path base;
+  if (const char* x = std::getenv("XDG_CONFIG_HOME"); x && *x)
+    base = x;
+  else if (const char* h = std::getenv("HOME"); h && *h)
+    base = std::filesystem::path(h) / ".config";
+  else
+    return {};
+  return (base / "vxr" / "desktop.json").string();
+}
+
+Result<WindowGeometry> load_window_geometry(const std::string& path) {
+  WindowGeometry g;
+  std::ifstream in(path);
+  if (!in) return g;  // first run
+  std::stringstream text;
+  text << in.rdbuf();
+  nlohmann::json j = nlohmann::json::parse(text.str(), nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return invalid_argument(path + ": not a JSON object");
+  for (const char* key : {"width", "height"}) {
+    if (!j.contains(key)) continue;
+    if (!j[key].is_number_unsigned() || j[key].get<uint64_t>() < 64 || j[key].get<uint64_t>() > 16384)
+      return invalid_argument(path + ": '" + key + "' must be an integer in 64..16384");
+    (std::string(key) == "width" ? g.width : g.height) = j[key].get<uint32_t>();
+  }
+  return g;
+}
+
+Status save_window_geometry(const std::string& path, const WindowGeometry& g) {
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
+  if (ec) return io_error(path + ": " + ec.message());
+  nlohmann::json j = {{"width", g.width}, {"height", g.height}};
+  return write_file_atomically(path, j.dump(2) + "\n");
+}
+
+}  // namespace vxr::xr
