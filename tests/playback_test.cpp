@@ -78,7 +78,7 @@ TEST_CASE("playback clock: a slow renderer drops timepoints, never repeats or re
   CHECK(clock.counters().dropped == 20 - shown.size());
 }
 
-TEST_CASE("playback clock: looping wraps to 0 and counts loops; order increases within a loop") {
+TEST_CASE("playback clock: looping wraps to 0 and counts loops, order increases within a loop") {
   PlaybackClock clock(4, {.fps = 10, .loop = true});
   clock.play(0.0);
   auto shown = run(clock, 0.0, 0.1, 10);
