@@ -14,6 +14,7 @@
 
 #include "command.h"
 #include "core/output_file.h"
+#include "render/annotation_renderer.h"
 #include "render/volume_session.h"
 #include "xr/headless/headless_target.h"
 #include "xr/headless/movie.h"
@@ -127,6 +128,11 @@ int run(const Options& o) {
   const VolumeInfo& info = session->source->info();
   const VolumePlacement placement{{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])},
                                   info.voxel_size};
+  if (!session->annotation_store.empty()) {
+    auto annotations = load_annotation_scene(session->annotation_store, placement, 0);
+    if (!annotations) return fail(annotations.status());
+    vo.annotations = std::move(annotations).value();
+  }
   auto stats = xr::run_view(choice->factory, session->source, vo, xr::default_volume_transform(placement));
   if (!stats) return fail(stats.status());
   if (!o.movie.empty()) {
@@ -183,6 +189,7 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--movie", o->movie,
                   "headless: render the pose script's camera path (one view) and write it as an MP4 (needs ffmpeg)");
   cmd->add_option("--fps", o->fps, "--movie: frames per second (default 30)")->check(CLI::Range(0.001, 1000.0));
+  add_annotations_option(cmd, o->flags.annotations);
   cmd->add_option("--colormap", o->flags.colormap, "colormap name (default hot)");
   cmd->add_option("--window", o->flags.window, "LO,HI data window (default: from the data)");
   cmd->add_option("--model", o->flags.model, "optical model: ea, emission or mip");

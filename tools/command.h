@@ -9,6 +9,7 @@
 
 #include "core/status.h"
 #include "gpu/context.h"
+#include "scene/render_settings.h"
 
 namespace vxr::cli {
 
@@ -40,6 +41,12 @@ void add_catalog_command(CLI::App& app, Invocation& inv);
 // create` runs); prints as `vxr import` does and returns its exit code.
 int import_volume(const std::vector<std::string>& inputs, const std::string& output, const std::string& voxel_size,
                   const std::string& unit);
+
+// Shared by `vxr render` and `vxr view` (tools/scene_flags.cpp):
+// --annotations STORE.
+void add_annotations_option(CLI::App* cmd, std::string& store);
+// A card's Scene: "STORE:ID", or "ID" of `default_store` (may be empty).
+Result<Scene> load_card_scene(const std::string& spec, const std::string& default_store = "");
 
 // Opens the Vulkan device (VXR_DEVICE, VXR_VALIDATION from the environment).
 Result<std::unique_ptr<gpu::Context>> open_gpu();

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "gpu/resources.h"
+#include "render/annotation_renderer.h"
 #include "render/lod/brick_renderer.h"
 #include "xr/frame_target.h"
 #include "xr/lens_warp.h"
@@ -29,6 +30,11 @@ class EyeRenderer {
   // preloaded whole.
   static Result<std::unique_ptr<EyeRenderer>> create(gpu::Context& ctx, std::shared_ptr<const ChunkSource> source,
                                                      ChunkCache* stream_from = nullptr);
+
+  // Annotations drawn with every view from now on (world units, the volume
+  // centred at the origin: AnnotationScene). Each view records their pass
+  // first, into the same command buffer; rays end at their depth. Empty: none.
+  Status set_annotations(AnnotationScene scene);
 
   Status begin_frame(VkCommandBuffer cmd, const BrickFrameSettings& frame) {
     return renderer_->begin_frame(cmd, frame);
@@ -55,6 +61,8 @@ class EyeRenderer {
   gpu::Context& ctx_;
   std::shared_ptr<const ChunkSource> source_;
   std::unique_ptr<BrickRenderer> renderer_;
+  std::unique_ptr<AnnotationRenderer> annotation_renderer_;  // made when a scene is set
+  AnnotationScene annotations_;
   std::vector<gpu::Image> warped_;  // per view index
   gpu::Image offscreen_;            // render()'s target
 };

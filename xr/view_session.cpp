@@ -79,6 +79,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
   ChunkCache cache(source, {options.cache_bytes, options.loader_threads});
   VXR_RETURN_IF_ERROR(target.attach(*ctx));
   VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, source, &cache));
+  VXR_RETURN_IF_ERROR(eyes->set_annotations(options.annotations));
   // Pool changes the settings need (apron 2 for gradients) before any frame records.
   VXR_RETURN_IF_ERROR(eyes->renderer().prepare(options.settings));
   VXR_RETURN_IF_ERROR(commands.create(*ctx));

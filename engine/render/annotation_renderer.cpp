@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "annotate/annotation_store.h"
 #include "core/trace.h"
 #include "shared/imposter_params.h"
 
@@ -56,16 +57,52 @@ AnnotationScene annotation_scene(std::span<const annotate::Marker> markers,
     scene.spheres.push_back({world_of(placement, m.pos), marker_radius,
                              glm::vec4(float(m.color[0]), float(m.color[1]), float(m.color[2]), float(m.color[3]))});
   }
+  const double voxel = std::min({placement.voxel_size[0], placement.voxel_size[1], placement.voxel_size[2]});
   for (const annotate::Skeleton& sk : skeletons) {
     for (const auto& [id, n] : sk.nodes()) {
-      const double r = std::max(n.radius, min_node_radius);
+      const double r = std::max(n.radius * voxel, min_node_radius);
       scene.spheres.push_back({world_of(placement, n.pos), r, skeleton_color});
       if (n.parent == annotate::kNoParent) continue;
       const annotate::SkeletonNode* p = sk.find(n.parent);
       if (!p) continue;
-      scene.cones.push_back({world_of(placement, p->pos), world_of(placement, n.pos), std::max(p->radius, min_node_radius),
+      scene.cones.push_back({world_of(placement, p->pos), world_of(placement, n.pos), std::max(p->radius * voxel, min_node_radius),
                              r, skeleton_color});
     }
+  }
+  return scene;
+}
+
+Result<AnnotationScene> load_annotation_scene(const std::string& store_path, const VolumePlacement& placement,
+                                              uint32_t timepoint, double marker_radius) {
+  VXR_TRACE_SCOPE("annotations.load");
+  auto opened = annotate::AnnotationStore::open(store_path, /*create=*/false);
+  if (!opened) return opened.status();  // names the store
+  const annotate::AnnotationStore& store = **opened;
+  VXR_ASSIGN_OR_RETURN(std::vector<annotate::Marker> markers, store.markers());
+  VXR_ASSIGN_OR_RETURN(std::vector<annotate::SkeletonInfo> infos, store.skeletons());
+  std::vector<annotate::Skeleton> skeletons;
+  for (const annotate::SkeletonInfo& info : infos) {
+    VXR_ASSIGN_OR_RETURN(annotate::Skeleton sk, store.skeleton(info.id));
+    skeletons.push_back(std::move(sk));
+  }
+  const double diagonal = glm::length(placement.extent());
+  if (!(marker_radius > 0.0)) marker_radius = 0.015 * diagonal;
+  const double voxel = std::min({placement.voxel_size[0], placement.voxel_size[1], placement.voxel_size[2]});
+  AnnotationScene scene = annotation_scene(markers, skeletons, placement, timepoint, marker_radius, 0.5 * voxel);
+  VXR_ASSIGN_OR_RETURN(std::vector<annotate::StoredMesh> meshes, store.meshes());
+  for (const annotate::StoredMesh& stored : meshes) {
+    VXR_ASSIGN_OR_RETURN(annotate::Mesh mesh, store.mesh_geometry(stored.id));
+    AnnotationMesh m;
+    const glm::vec4 color(float(stored.color[0]), float(stored.color[1]), float(stored.color[2]), float(stored.color[3]));
+    for (const auto& tri : mesh.triangles) {
+      for (uint32_t v : tri) {
+        if (v >= mesh.positions.size())
+          return corrupt(store_path + ": mesh " + std::to_string(stored.id) + " has a triangle past its vertices");
+        m.corners.push_back(world_of(placement, mesh.positions[v]));
+      }
+      m.colors.push_back(color);
+    }
+    if (!m.colors.empty()) scene.meshes.push_back(std::move(m));
   }
   return scene;
 }

@@ -19,6 +19,7 @@
 #include <glm/glm.hpp>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "annotate/annotations.h"
@@ -65,11 +66,20 @@ AnnotationMesh annotation_mesh(const annotate::Mesh& mesh, const glm::dvec3& off
 
 // A store's markers (at `timepoint`) and skeletons placed in world space:
 // markers as spheres of `marker_radius` world units, nodes as spheres of
-// their radius (at least `min_node_radius`), each edge as a cone.
+// their radius (voxels of the smallest side; at least `min_node_radius`
+// world units), each edge as a cone.
 AnnotationScene annotation_scene(std::span<const annotate::Marker> markers,
                                  std::span<const annotate::Skeleton> skeletons, const VolumePlacement& placement,
                                  uint32_t timepoint, double marker_radius, double min_node_radius,
                                  glm::vec4 skeleton_color = {0.2f, 0.8f, 1.0f, 1.0f});
+
+// Everything an annotation store holds that is drawn, placed for the volume:
+// markers at `timepoint` as spheres of `marker_radius` world units (0: 1.5%
+// of the box diagonal), skeletons (node radii in voxels of the smallest side,
+// at least half a voxel), and every stored mesh in its colour (positions in
+// voxels). Errors name the store.
+Result<AnnotationScene> load_annotation_scene(const std::string& store_path, const VolumePlacement& placement,
+                                              uint32_t timepoint, double marker_radius = 0.0);
 
 struct AnnotationImage {
   ImageRgba8 color;               // premultiplied, top row first; transparent where nothing is
