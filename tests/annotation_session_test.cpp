@@ -11,6 +11,7 @@
 #include "assets/assets.h"
 #include "cli_runner.h"
 #include "core/image.h"
+#include "core/output_file.h"
 #include "gpu_fixture.h"
 #include "render/annotation_renderer.h"
 #include "render/volume_session.h"
@@ -217,4 +218,67 @@ TEST_CASE("annotations: vxr render and vxr view draw a project's store, or the o
   CHECK(bad.rc != 0);
   CHECK(bad.err.find("nowhere: no annotation store here") != std::string::npos);
   CHECK(!fs::exists(dir / "x.png"));
+}
+
+TEST_CASE("cards: vxr view --card restores a card's scene and draws its snapshot bit for bit") {
+  const fs::path dir = scratch_dir("annotations", "view_card");
+  vxr_ok("project create " + q(dir / "head") + " --from " + q(std::string(VXR_TESTDATA_DIR) + "/tiff/mri-stack-calibrated.tif"),
+         dir);
+  const fs::path project = dir / "head.vxr", store = project / "annotations";
+  vxr_ok("annotate add-marker " + q(store) + " --pos 93,113,26 --color 1,1,0", dir);
+  // A moved, turned and scaled volume seen from a chosen pose, with settings the defaults are not.
+  const fs::path scene = dir / "scene.json";
+  REQUIRE(write_file_atomically(scene.string(),
+                                R"({"transform": {"position": [4, -6, 10], "rotation": [0.9, 0.1, 0.3, 0.2], "scale": 1.3},
+                                    "camera": {"eye": [40, -120, 150], "target": [0, 0, 0], "up": [0, 0, 1], "fov_y_deg": 40}})")
+              .is_ok());
+  vxr_ok("render " + q(project) + " --settings " + q(scene) + " --colormap viridis --window 10,200 --step 0.75 " +
+             "--size 88x72 -o " + q(dir / "card1.png") + " --save-card " + q(store),
+         dir);
+  // Another volume's card in the same store: channels 1 and 2 at timepoint 5 of a time series.
+  vxr_ok("import " + q(std::string(VXR_TESTDATA_DIR) + "/ome-tiff/multi-channel-time-series.ome.tif") + " -o " +
+             q(dir / "series.vxc"),
+         dir);
+  vxr_ok("render " + q(dir / "series.vxc") + " --timepoint 5 --channel 1,2 --model mip --size 64x48 -o " +
+             q(dir / "card2.png") + " --save-card " + q(store),
+         dir);
+
+  std::string snapshots[3];
+  {
+    auto opened = annotate::AnnotationStore::open(store.string(), /*create=*/false);  // closed before the commands run
+    REQUIRE(opened.is_ok());
+    for (int id : {1, 2}) {
+      auto card = (*opened)->card(annotate::Id(id), /*with_media=*/true);
+      REQUIRE(card.is_ok());
+      snapshots[id].assign(card->snapshot_png.begin(), card->snapshot_png.end());
+      REQUIRE(!snapshots[id].empty());
+    }
+  }
+  for (int id : {1, 2}) {
+    CAPTURE(id);
+    const std::string& snapshot = snapshots[id];
+    const fs::path out = dir / ("view" + std::to_string(id));
+    // Card 1 by ID of the project given as the input; card 2 by STORE:ID alone (the card names its volume).
+    const std::string which = id == 1 ? q(project) + " --card 1" : "--card " + q(store.string() + ":2");
+    vxr_ok("view " + which + " --headless --frames 2 --png-dir " + q(out), dir);
+    CHECK(read_bytes(out / "last_view.png") == snapshot);
+    vxr_ok("render " + which + " -o " + q(out / "render.png"), dir);
+    CHECK(read_bytes(out / "render.png") == snapshot);
+  }
+  // The card of the annotated picture shows its marker: without the store the picture differs.
+  vxr_ok("render " + q(project / "volume.vxc") + " --settings " + q(scene) +
+             " --colormap viridis --window 10,200 --step 0.75 --size 88x72 -o " + q(dir / "bare.png"),
+         dir);
+  CHECK(read_bytes(dir / "bare.png") != read_bytes(dir / "card1.png"));
+
+  // The card holds the settings: a flag that would change them is refused, in one line.
+  CliRun bad = run_vxr("view " + q(project) + " --card 1 --headless --frames 1 --colormap gray", dir);
+  CHECK(bad.rc == 2);
+  CHECK(bad.err.find("--card restores the card's render settings") != std::string::npos);
+  bad = run_vxr("view " + q(project) + " --card 7 --headless --frames 1", dir);
+  CHECK(bad.rc == 2);
+  CHECK(bad.err.find("no card 7") != std::string::npos);
+  bad = run_vxr("view --card 1 --headless --frames 1", dir);  // no store to take ID from
+  CHECK(bad.rc == 2);
+  CHECK(bad.err.find("give STORE:ID") != std::string::npos);
 }

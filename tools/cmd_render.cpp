@@ -196,6 +196,7 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
 
   BrickRendererOptions ro;
   ro.pool.channels = *drawn;
+  ro.preload_if_fits = true;  // small volumes: every brick in the slots vxr view gives them (same pixels)
   auto renderer = BrickRenderer::create(gpu, *src, ro);
   if (!renderer) return fail(renderer.status());
   BrickRenderer& r = **renderer;
@@ -244,7 +245,8 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   }
   nlohmann::json frames_json = nlohmann::json::array();
   BrickFrameStats st;
-  uint64_t total_bytes = 0, total_bricks = 0;
+  // create() uploaded the pinned bricks (top level; every brick of a volume that fits).
+  uint64_t total_bricks = r.pool().used(), total_bytes = total_bricks * r.pool().brick_bytes();
   std::vector<double> frame_ms;
   Result<ImageRgba8> image = invalid_argument("unset");
   int frames = 0;
@@ -377,7 +379,7 @@ int run(const Options& given) {
   };
   if (!o.card.empty()) {
     if (!o.settings_path.empty()) return fail(invalid_argument("give --card or --settings, not both"), kExitUsage);
-    auto sc = load_card_scene(o.card, o.annotations);
+    auto sc = load_card_scene(o.card, o.annotations, o.input);
     if (!sc) {
       const ErrorCode c = sc.status().code();
       return fail(sc.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage : kExitFailure);

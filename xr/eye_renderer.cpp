@@ -25,13 +25,14 @@ void image_barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect
 }
 
 Result<std::unique_ptr<EyeRenderer>> EyeRenderer::create(gpu::Context& ctx, std::shared_ptr<const ChunkSource> source,
-                                                         ChunkCache* stream_from) {
+                                                         ChunkCache* stream_from, std::vector<uint32_t> channels) {
   if (!source) return invalid_argument("eye renderer: no volume");
   std::unique_ptr<EyeRenderer> r(new EyeRenderer(ctx));
   r->source_ = std::move(source);
   BrickRendererOptions o;
   o.stream_from = stream_from;
   o.preload_if_fits = true;
+  o.pool.channels = std::move(channels);
   VXR_ASSIGN_OR_RETURN(r->renderer_, BrickRenderer::create(ctx, *r->source_, o));
   return r;
 }

@@ -28,8 +28,10 @@ class EyeRenderer {
   // `stream_from` (may be null): the cache whose loader threads read missing
   // bricks; null reads them after each render() (tests). Small volumes are
   // preloaded whole.
+  // `channels`: the source channels drawn (BrickPoolOptions::channels; empty: the first up to 4).
   static Result<std::unique_ptr<EyeRenderer>> create(gpu::Context& ctx, std::shared_ptr<const ChunkSource> source,
-                                                     ChunkCache* stream_from = nullptr);
+                                                     ChunkCache* stream_from = nullptr,
+                                                     std::vector<uint32_t> channels = {});
 
   // Annotations drawn with every view from now on (world units, the volume
   // centred at the origin: AnnotationScene). Each view records their pass
