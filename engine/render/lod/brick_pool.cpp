@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include "core/trace.h"
@@ -56,38 +57,106 @@ BrickCells brick_cells_for(uint32_t chunk_size) {
   return c;
 }
 
+namespace {
+
+// Min and max of `in` over each cell's texel range, one axis at a time:
+// z over whole planes, then y over whole rows (both plain element-wise loops
+// the compiler vectorises), then x within the n*n remaining rows. The same
+// voxels as the direct 3D loop, each read about once instead of about twice.
+// Start values that every texel replaces, except a NaN (as std::min/max from +-inf).
+template <typename T>
+constexpr T kHighest = std::numeric_limits<T>::has_infinity ? std::numeric_limits<T>::infinity()
+                                                             : std::numeric_limits<T>::max();
+template <typename T>
+constexpr T kLowest = std::numeric_limits<T>::has_infinity ? -std::numeric_limits<T>::infinity()
+                                                            : std::numeric_limits<T>::lowest();
+
+template <typename T>
+void cell_min_max(const T* in, uint32_t edge, uint32_t n, const std::vector<uint32_t>& lo,
+                  const std::vector<uint32_t>& hi, std::vector<T>& out_lo, std::vector<T>& out_hi) {
+  const size_t plane = size_t(edge) * edge;
+  std::vector<T> zlo(n * plane), zhi(n * plane);  // [cz][y][x]
+  for (uint32_t c = 0; c < n; ++c) {
+    T* l = zlo.data() + c * plane;
+    T* h = zhi.data() + c * plane;
+    std::fill_n(l, plane, kHighest<T>);
+    std::fill_n(h, plane, kLowest<T>);
+    for (uint32_t z = lo[c]; z <= hi[c]; ++z) {
+      const T* p = in + z * plane;
+      for (size_t i = 0; i < plane; ++i) {
+        l[i] = p[i] < l[i] ? p[i] : l[i];  // a NaN never replaces a number (as std::min)
+        h[i] = h[i] < p[i] ? p[i] : h[i];
+      }
+    }
+  }
+  std::vector<T> ylo(size_t(n) * n * edge), yhi(size_t(n) * n * edge);  // [cz][cy][x]
+  for (uint32_t cz = 0; cz < n; ++cz)
+    for (uint32_t c = 0; c < n; ++c) {
+      T* l = ylo.data() + (size_t(cz) * n + c) * edge;
+      T* h = yhi.data() + (size_t(cz) * n + c) * edge;
+      const T* pl = zlo.data() + cz * plane;
+      const T* ph = zhi.data() + cz * plane;
+      std::copy_n(pl + size_t(lo[c]) * edge, edge, l);
+      std::copy_n(ph + size_t(lo[c]) * edge, edge, h);
+      for (uint32_t y = lo[c] + 1; y <= hi[c]; ++y)
+        for (uint32_t x = 0; x < edge; ++x) {
+          const T a = pl[size_t(y) * edge + x], b = ph[size_t(y) * edge + x];
+          l[x] = a < l[x] ? a : l[x];
+          h[x] = h[x] < b ? b : h[x];
+        }
+    }
+  out_lo.resize(size_t(n) * n * n);
+  out_hi.resize(size_t(n) * n * n);
+  for (size_t row = 0; row < size_t(n) * n; ++row)
+    for (uint32_t c = 0; c < n; ++c) {
+      T l = ylo[row * edge + lo[c]], h = yhi[row * edge + lo[c]];
+      for (uint32_t x = lo[c] + 1; x <= hi[c]; ++x) {
+        const T a = ylo[row * edge + x], b = yhi[row * edge + x];
+        l = a < l ? a : l;
+        h = h < b ? b : h;
+      }
+      out_lo[row * n + c] = l;
+      out_hi[row * n + c] = h;
+    }
+}
+
+// `unorm_max`: the texel value that means 1 (1 for floats).
+template <typename T>
+void cell_ranges_as_float(const T* texels, uint32_t edge, const BrickCells& cells, uint32_t apron, float unorm_max,
+                          glm::vec2* out) {
+  const uint32_t n = cells.cells_per_axis, s = cells.cell_size;
+  // Slot texel range of cell k along an axis: local voxels k*s - 1 .. k*s + s, clipped to the slot.
+  std::vector<uint32_t> lo(n), hi(n);
+  for (uint32_t k = 0; k < n; ++k) {
+    lo[k] = uint32_t(std::max<int64_t>(int64_t(k) * s - 1 + apron, 0));
+    hi[k] = uint32_t(std::min<int64_t>(int64_t(k) * s + s + apron, edge - 1));
+  }
+  std::vector<T> mn, mx;
+  cell_min_max(texels, edge, n, lo, hi, mn, mx);
+  for (size_t i = 0; i < mn.size(); ++i) {
+    // Texel to float is monotone, so the float of the extreme texel is the extreme float.
+    const float l = float(mn[i]) / unorm_max, h = float(mx[i]) / unorm_max;
+    // Filtering mixes values with rounded weights: widen by far more than its rounding.
+    const float pad_lo = std::abs(l) * 1e-5f + 1e-7f, pad_hi = std::abs(h) * 1e-5f + 1e-7f;
+    out[i] = glm::vec2(l - pad_lo, h + pad_hi);
+  }
+}
+
+}  // namespace
+
 void compute_cell_ranges(VkFormat format, const uint8_t* texels, uint32_t chunk_size, uint32_t apron,
                          const BrickCells& cells, glm::vec2* out) {
-  const uint32_t edge = chunk_size + 2 * apron, n = cells.cells_per_axis, s = cells.cell_size;
-  auto value = [&](size_t i) -> float {
-    if (format == VK_FORMAT_R8_UNORM) return float(texels[i]) / 255.0f;
-    if (format == VK_FORMAT_R16_UNORM) {
-      uint16_t v;
-      std::memcpy(&v, texels + 2 * i, 2);
-      return float(v) / 65535.0f;
-    }
-    float v;
-    std::memcpy(&v, texels + 4 * i, 4);
-    return v;
-  };
-  // Slot texel range of cell k along an axis: local voxels k*s - 1 .. k*s + s, clipped to the slot.
-  auto lo_of = [&](uint32_t k) { return uint32_t(std::max<int64_t>(int64_t(k) * s - 1 + apron, 0)); };
-  auto hi_of = [&](uint32_t k) { return uint32_t(std::min<int64_t>(int64_t(k) * s + s + apron, edge - 1)); };
-  for (uint32_t cz = 0; cz < n; ++cz)
-    for (uint32_t cy = 0; cy < n; ++cy)
-      for (uint32_t cx = 0; cx < n; ++cx) {
-        float lo = INFINITY, hi = -INFINITY;
-        for (uint32_t z = lo_of(cz); z <= hi_of(cz); ++z)
-          for (uint32_t y = lo_of(cy); y <= hi_of(cy); ++y)
-            for (uint32_t x = lo_of(cx); x <= hi_of(cx); ++x) {
-              const float v = value((size_t(z) * edge + y) * edge + x);
-              lo = std::min(lo, v);
-              hi = std::max(hi, v);
-            }
-        // Filtering mixes values with rounded weights: widen by far more than its rounding.
-        const float pad_lo = std::abs(lo) * 1e-5f + 1e-7f, pad_hi = std::abs(hi) * 1e-5f + 1e-7f;
-        out[(size_t(cz) * n + cy) * n + cx] = glm::vec2(lo - pad_lo, hi + pad_hi);
-      }
+  const uint32_t edge = chunk_size + 2 * apron;
+  if (format == VK_FORMAT_R8_UNORM) return cell_ranges_as_float(texels, edge, cells, apron, 255.0f, out);
+  const size_t n = size_t(edge) * edge * edge;
+  if (format == VK_FORMAT_R16_UNORM) {
+    std::vector<uint16_t> v(n);
+    std::memcpy(v.data(), texels, n * 2);
+    return cell_ranges_as_float(v.data(), edge, cells, apron, 65535.0f, out);
+  }
+  std::vector<float> v(n);
+  std::memcpy(v.data(), texels, n * 4);
+  cell_ranges_as_float(v.data(), edge, cells, apron, 1.0f, out);
 }
 
 Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_bytes, uint32_t max_dim,
@@ -158,18 +227,35 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   const uint64_t ext[3] = {uint64_t(slots.x) * p->edge_, uint64_t(slots.y) * p->edge_, uint64_t(slots.z) * p->edge_};
   // The ring must hold at least one brick, however wide the container's chunks are.
   const uint64_t staging_bytes = std::max(options.staging_bytes, p->brick_bytes_);
+  const VkExtent3D extent{uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])};
+  const VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  p->direct_ = options.direct_writes && gpu::host_mapped_image_supported(ctx, VK_IMAGE_TYPE_3D, format, usage, extent);
   for (uint32_t c = 0; c < nch; ++c) {
-    VXR_ASSIGN_OR_RETURN(gpu::Image atlas,
-                         gpu::create_image(ctx, {VK_IMAGE_TYPE_3D, format,
-                                                 {uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])},
-                                                 VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                                 "brick atlas"}));
+    gpu::ImageCreateInfo ii{VK_IMAGE_TYPE_3D, format, extent, usage, "brick atlas"};
+    ii.host_mapped = p->direct_;
+    VXR_ASSIGN_OR_RETURN(gpu::Image atlas, gpu::create_image(ctx, ii));
     p->atlases_.push_back(std::move(atlas));
   }
-  VXR_ASSIGN_OR_RETURN(p->staging_, gpu::create_buffer(ctx, {staging_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                                             gpu::MemoryIntent::kUpload, "brick staging ring"}));
+  if (p->direct_) {
+    // Zeroed by the host (never-written texels are defined), then GENERAL for good.
+    for (gpu::Image& atlas : p->atlases_)
+      for (uint32_t z = 0; z < extent.depth; ++z)
+        for (uint32_t y = 0; y < extent.height; ++y)
+          std::memset(atlas.mapped + z * atlas.depth_pitch + y * atlas.row_pitch, 0,
+                      size_t(extent.width) * p->texel_bytes_);
+    VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+      for (gpu::Image& atlas : p->atlases_)
+        gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_HOST_BIT,
+                              VK_ACCESS_2_HOST_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                              VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    }));
+    p->scratch_.resize(p->brick_bytes_);
+  } else {
+    VXR_ASSIGN_OR_RETURN(p->staging_, gpu::create_buffer(ctx, {staging_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                                               gpu::MemoryIntent::kUpload, "brick staging ring"}));
+  }
   // Clear once so never-written texels are defined (validation and determinism).
-  VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+  if (!p->direct_) VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
     for (gpu::Image& atlas : p->atlases_) {
       gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
                             VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
@@ -222,20 +308,33 @@ void BrickPool::slot_chunks(ChunkKey brick, std::vector<ChunkKey>& out) const {
   }
 }
 
+Result<std::shared_ptr<const Chunk>> BrickPool::checked_chunk(const ChunkKey& k, const ReadChunk& fetch) const {
+  VXR_ASSIGN_OR_RETURN(auto chunk, fetch(k));
+  if (!chunk) return chunk;  // not loaded yet (streaming)
+  const DType dtype = src_.info().dtype;
+  const uint32_t e = src_.chunk_size() + 2 * src_.apron();
+  if (chunk->edge != e || chunk->dtype != dtype || chunk->data.size() != uint64_t(e) * e * e * dtype_bytes(dtype))
+    return internal_error("brick pool: chunk level " + std::to_string(k.level) + " has edge " +
+                          std::to_string(chunk->edge) + " and " + std::to_string(chunk->data.size()) +
+                          " bytes, expected edge " + std::to_string(e) + " of " + dtype_name(dtype));
+  return chunk;
+}
+
+Result<const uint8_t*> BrickPool::slot_texels_from(const ChunkKey& key, uint8_t* out, const ReadChunk& fetch,
+                                                   std::shared_ptr<const Chunk>& keep) const {
+  const DType dtype = src_.info().dtype;
+  if (apron_ == src_.apron() && (dtype == DType::kU8 || dtype == DType::kU16)) {
+    VXR_ASSIGN_OR_RETURN(keep, checked_chunk(key, fetch));
+    return keep ? keep->data.data() : nullptr;
+  }
+  VXR_ASSIGN_OR_RETURN(bool filled, fill_slot_from(key, out, fetch));
+  return filled ? out : nullptr;
+}
+
 Result<bool> BrickPool::fill_slot_from(const ChunkKey& key, uint8_t* out, const ReadChunk& fetch) const {
   const DType dtype = src_.info().dtype;
   const uint32_t a = src_.apron(), cs = src_.chunk_size();
-  // nullptr: not loaded yet (streaming); the slot is left unfinished.
-  auto read = [&](const ChunkKey& k) -> Result<std::shared_ptr<const Chunk>> {
-    VXR_ASSIGN_OR_RETURN(auto chunk, fetch(k));
-    if (!chunk) return chunk;
-    const uint32_t e = cs + 2 * a;
-    if (chunk->edge != e || chunk->dtype != dtype || chunk->data.size() != uint64_t(e) * e * e * dtype_bytes(dtype))
-      return internal_error("brick pool: chunk level " + std::to_string(k.level) + " has edge " +
-                            std::to_string(chunk->edge) + " and " + std::to_string(chunk->data.size()) +
-                            " bytes, expected edge " + std::to_string(e) + " of " + dtype_name(dtype));
-    return chunk;
-  };
+  auto read = [&](const ChunkKey& k) { return checked_chunk(k, fetch); };
   if (apron_ == a) {  // the payload is the slot
     VXR_ASSIGN_OR_RETURN(auto chunk, read(key));
     if (!chunk) return false;
@@ -333,16 +432,27 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
     key.channel = 0;
     if (resident(key)) continue;
     const bool over_budget = st.bricks > 0 && st.bytes + brick_bytes_ > budget_bytes;
-    if (over_budget || ring + brick_bytes_ > staging_.size) {
+    if (over_budget || (!direct_ && ring + brick_bytes_ > staging_.size)) {
       ++st.deferred;
       continue;
     }
+    // Each channel's slot texels: in the staging ring, or (direct writes) the
+    // chunk's own bytes where they already are the slot, else the scratch.
+    uint8_t* brick = direct_ ? scratch_.data() : static_cast<uint8_t*>(staging_.mapped) + ring;
+    const uint8_t* texels[VXR_MAX_CHANNELS] = {};
+    std::shared_ptr<const Chunk> keep[VXR_MAX_CHANNELS];
     bool complete = true;
     for (uint32_t c = 0; c < channels() && complete; ++c) {
       ChunkKey ck = key;
       ck.channel = channel_map_[c];
-      VXR_ASSIGN_OR_RETURN(complete,
-                           fill_slot_from(ck, static_cast<uint8_t*>(staging_.mapped) + ring + c * channel_bytes_, fetch));
+      uint8_t* out = brick + c * channel_bytes_;
+      if (direct_) {
+        VXR_ASSIGN_OR_RETURN(texels[c], slot_texels_from(ck, out, fetch, keep[c]));
+        complete = texels[c] != nullptr;
+      } else {
+        VXR_ASSIGN_OR_RETURN(complete, fill_slot_from(ck, out, fetch));
+        texels[c] = out;
+      }
     }
     if (!complete) {  // streaming: a chunk it needs is not decoded yet
       ++st.deferred;
@@ -354,7 +464,7 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
       break;
     }
     const glm::uvec3 o = slot_origin(*slot) - glm::uvec3(apron_);
-    for (uint32_t c = 0; c < channels(); ++c) {
+    for (uint32_t c = 0; c < channels() && !direct_; ++c) {
       VkBufferImageCopy r{};
       r.bufferOffset = ring + c * channel_bytes_;
       r.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
@@ -363,11 +473,12 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
       regions[c].push_back(r);
     }
     const VkFormat format = atlases_[0].format;
-    for (uint32_t c = 0; c < channels(); ++c)
-      compute_cell_ranges(format, static_cast<const uint8_t*>(staging_.mapped) + ring + c * channel_bytes_,
-                          src_.chunk_size(), apron_, cells_,
+    for (uint32_t c = 0; c < channels(); ++c) {
+      compute_cell_ranges(format, texels[c], src_.chunk_size(), apron_, cells_,
                           static_cast<glm::vec2*>(cell_ranges_.mapped) + (size_t(*slot) * channels() + c) * cells_.count());
-    ring += (brick_bytes_ + 15) & ~uint64_t(15);
+      if (direct_) write_slot(c, *slot, texels[c]);
+    }
+    if (!direct_) ring += (brick_bytes_ + 15) & ~uint64_t(15);
     slot_[*slot] = {key, frame_, false, true};
     map_[key] = *slot;
     ++st.bricks;
@@ -376,7 +487,20 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
   return st;
 }
 
+void BrickPool::write_slot(uint32_t c, uint32_t slot, const uint8_t* texels) {
+  // The slot is not drawn this frame (free_slot) and the caller waited for the
+  // frames that drew it, so nothing on the device reads these texels now.
+  const gpu::Image& atlas = atlases_[c];
+  const glm::uvec3 o = slot_origin(slot) - glm::uvec3(apron_);
+  const size_t row = size_t(edge_) * texel_bytes_;
+  for (uint32_t z = 0; z < edge_; ++z)
+    for (uint32_t y = 0; y < edge_; ++y)
+      std::memcpy(atlas.mapped + (o.z + z) * atlas.depth_pitch + (o.y + y) * atlas.row_pitch + size_t(o.x) * texel_bytes_,
+                  texels + (size_t(z) * edge_ + y) * row, row);
+}
+
 void BrickPool::record_copies(VkCommandBuffer cmd, const std::vector<std::vector<VkBufferImageCopy>>& regions) {
+  if (direct_) return;  // written in place by stage()
   for (uint32_t c = 0; c < channels(); ++c) {
     gpu::Image& atlas = atlases_[c];
     gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
@@ -395,7 +519,7 @@ Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uin
   std::vector<std::vector<VkBufferImageCopy>> regions;
   VXR_ASSIGN_OR_RETURN(UploadStats st,
                        stage(requests, budget_bytes, [this](const ChunkKey& k) { return src_.read(k); }, regions));
-  if (st.bricks == 0) return st;
+  if (st.bricks == 0 || direct_) return st;
   VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_copies(cmd, regions); }));
   return st;
 }
