@@ -10,6 +10,7 @@
 
 #include <xxhash.h>
 
+#include "volume/chunk_buffers.h"
 #include "volume/chunk_codec.h"
 
 namespace vxr {
@@ -210,15 +211,15 @@ Result<std::shared_ptr<const Chunk>> read_chunk_record(const ContainerFile& file
   const ChunkKey key = key_of(entry);
   const std::string what = file.path() + ": " + describe_key(key);
   VXR_ASSIGN_OR_RETURN(const std::span<const uint8_t> stored, load_record(file, layout, entry, limit, what));
-  auto chunk = std::make_shared<Chunk>();
+  auto chunk = std::make_unique<Chunk>();
   chunk->key = key;
   chunk->edge = layout.edge();
   chunk->dtype = layout.info.dtype;
   chunk->stats = {entry.min, entry.max};
-  chunk->data.resize(entry.raw_size);
+  chunk->data = take_chunk_buffer(entry.raw_size);  // every byte is written by the decoder
   if (Status s = decode_payload(static_cast<vxc::Codec>(entry.codec), chunk->dtype, chunk->stats, stored, chunk->data); !s)
     return corrupt(what + ": " + s.message());
-  return std::shared_ptr<const Chunk>(std::move(chunk));
+  return share_recycling(std::move(chunk));
 }
 
 Status check_chunk_record(const ContainerFile& file, const ContainerLayout& layout, const vxc::IndexEntry& entry,

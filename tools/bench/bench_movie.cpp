@@ -3,6 +3,7 @@
 // of need via TimepointPrefetcher) + upload into the GPU brick pool, against
 // the bare LZ4 decode bound of the same chunks in the same run.
 #include <lz4.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -41,6 +42,13 @@ struct MovieOptions {
   double fps = 25.0;         // playback rate of the render run (the paper's 25 volumes/s)
   uint32_t size = 256;       // render run image side
 };
+
+// CPU seconds of every thread of this process so far (user + system).
+double process_cpu_s() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -171,8 +179,10 @@ int run_movie(const MovieOptions& o) {
   Progress progress("movie: data path", uint64_t(T) * o.loops, false);
   uint64_t uploaded_bytes = 0;
   std::vector<double> per_volume_ms, loop_s;
+  double warm_cpu_s = 0;
   for (uint32_t loop = 0; loop < o.loops; ++loop) {
     const auto tl = std::chrono::steady_clock::now();
+    const double cpu0 = process_cpu_s();
     for (uint32_t t = 0; t < T; ++t) {
       std::vector<uint32_t> next;
       for (uint32_t k = 0; k < o.prefetch && k < T; ++k) next.push_back((t + k) % T);
@@ -192,6 +202,7 @@ int run_movie(const MovieOptions& o) {
       progress.advance(1);
     }
     loop_s.push_back(seconds_since(tl));
+    if (loop > 0) warm_cpu_s += process_cpu_s() - cpu0;
   }
   progress.finish();
   if (auto errors = cache.take_errors(); !errors.empty()) return cli::fail(errors.front().second);
@@ -243,6 +254,9 @@ int run_movie(const MovieOptions& o) {
       {"cache_budget_mb", double(cache_bytes) / double(1 << 20)},
       {"data_path_volumes_per_s", data_rate},
       {"data_path_first_loop_volumes_per_s", first_rate},
+      {"data_path_cpu_ms_per_volume", o.loops > 1 ? 1e3 * warm_cpu_s / (double(T) * (o.loops - 1)) : 0.0},
+      {"data_path_cpu_note", "CPU time of all threads per volume after the first loop: 1000 x cores / this is the rate"
+                             " the machine could sustain when nothing else runs"},
       {"data_path_note", "read + LZ4 decode on 2 cache loader threads (prefetch " + std::to_string(o.prefetch) +
                              " timepoints ahead) + BrickPool::upload of level 0; the cache holds fewer volumes than"
                              " the movie, so every loop reads and decodes every volume again; sustained = loops after"
