@@ -74,7 +74,6 @@ int run(const Options& given) {
     if (o.input.empty() && !o.sample) o.input = sc->volume;
     if (o.flags.annotations.empty()) o.flags.annotations = sc->annotations;
     if (!o.lod_bias_given) o.lod_bias = sc->lod_bias;
-    if (!o.width && sc->viewport[0] > 0) o.width = sc->viewport[0], o.height = sc->viewport[1];
     if (sc->renderer == "dense")
       std::fprintf(stderr, "vxr view: note: card %s was drawn by the dense renderer; the view draws it out of core\n",
                    o.card.c_str());
@@ -147,8 +146,11 @@ int run(const Options& given) {
       return fail(invalid_argument("--card: timepoint " + std::to_string(card->timepoint) + ", but " + o.input +
                                    " has " + std::to_string(info.timepoints)),
                   kExitUsage);
-    // One view with the card's camera, as vxr render --card draws it.
+    // One view with the card's camera and size, as vxr render --card draws it
+    // (a headset or window keeps its own eye size).
     req.headless.stereo = false;
+    if (!o.width && card->viewport[0] > 0) req.headless.script.width = card->viewport[0];
+    if (!o.height && card->viewport[1] > 0) req.headless.script.height = card->viewport[1];
     req.headless.camera = scene_camera(*card, placement, info.dims[2] == 1);
   }
 
