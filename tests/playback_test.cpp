@@ -279,7 +279,7 @@ TEST_CASE("play headless: looping plays in order within every loop") {
     for (size_t i = 1; i < l.size(); ++i) CHECK(l[i] > l[i - 1]);
 }
 
-TEST_CASE("bench movie: a movie longer than the cache is read again every loop; render run counts every timepoint") {
+TEST_CASE("bench movie: a movie longer than the cache is read again every loop, and the render run counts every timepoint") {
   // 6 timepoints, prefetch 1: the cache holds 2 x 2 volumes, so each of the 2
   // loops reads and decodes all 6 again (evictions), and the played run
   // shows or drops each timepoint exactly once.
