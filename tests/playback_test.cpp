@@ -280,27 +280,27 @@ TEST_CASE("play headless: looping plays in order within every loop") {
 }
 
 TEST_CASE("bench movie: a movie longer than the cache is read again every loop, and the render run counts every timepoint") {
-  // 6 timepoints, prefetch 1: the cache holds 2 x 2 volumes, so each of the 2
-  // loops reads and decodes all 6 again (evictions), and the played run
-  // shows or drops each timepoint exactly once.
+  // 12 one-chunk timepoints, prefetch 1: the cache holds 2 x 2 volumes and the
+  // brick pool 8 bricks, so the second loop reads, decodes and uploads all 12
+  // again; the played run shows or drops each timepoint exactly once.
   const std::filesystem::path dir = vxr::test::scratch_dir("playback", "bench_movie");
-  const auto run = vxr::test::run_vxr("bench movie --dims 48 40 36 --timepoints 6 --prefetch 1 --loops 2 --size 32 "
+  const auto run = vxr::test::run_vxr("bench movie --dims 48 40 36 --timepoints 12 --prefetch 1 --loops 2 --size 32 "
                                       "--fps 1000 --out " + vxr::test::shell_quote(dir.string()),
                                       dir, 300);
   REQUIRE_MESSAGE(run.rc == 0, run.err);
   std::ifstream f(dir / "movie.json");
   const auto doc = nlohmann::json::parse(f);
-  CHECK(doc["timepoints"].get<uint32_t>() == 6);
+  CHECK(doc["timepoints"].get<uint32_t>() == 12);
   CHECK(doc["data_path_volumes_per_s"].get<double>() > 0);
   CHECK(doc["lz4_decode_bound_volumes_per_s"].get<double>() > 0);
-  CHECK(doc["per_volume_ms"].size() == 12);
+  CHECK(doc["per_volume_ms"].size() == 24);
   const auto chunks = doc["level0_chunks_per_volume"].get<uint64_t>();
-  CHECK(doc["cache"]["loads"].get<uint64_t>() >= 2 * 6 * chunks);
+  CHECK(doc["cache"]["loads"].get<uint64_t>() >= 2 * 12 * chunks);
   CHECK(doc["cache"]["evictions"].get<uint64_t>() > 0);
   CHECK(doc["uploaded_bytes"].get<uint64_t>() > 0);
   CHECK(doc["render_volumes_per_s"].get<double>() > 0);
   CHECK(doc["shown"].get<uint64_t>() >= 1);
-  CHECK(doc["shown"].get<uint64_t>() + doc["dropped"].get<uint64_t>() == 6);
+  CHECK(doc["shown"].get<uint64_t>() + doc["dropped"].get<uint64_t>() == 12);
 }
 
 TEST_CASE("dense chunk source: a time series serves each timepoint's own voxels and ranges") {

@@ -190,7 +190,8 @@ int run_movie(const MovieOptions& o) {
       const auto tv = std::chrono::steady_clock::now();
       (*pool)->begin_frame();
       std::vector<ChunkKey> keys = prefetch.keys(t);
-      std::erase_if(keys, [&](const ChunkKey& k) { return (*pool)->resident(k); });  // only with T <= 2
+      // Still resident only when the pool (2+ volumes) holds the whole movie.
+      std::erase_if(keys, [&](const ChunkKey& k) { return (*pool)->resident(k); });
       while (!keys.empty()) {
         auto up = (*pool)->upload(keys, 1ull << 40);
         if (!up) return cli::fail(up.status());
