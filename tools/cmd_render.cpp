@@ -44,6 +44,7 @@
 #include "volume/load_dense.h"
 #include "volume/open_chunk_source.h"
 #include "volume/procedural_source.h"
+#include "volume_flags.h"
 
 namespace vxr::cli {
 namespace {
@@ -64,6 +65,7 @@ struct Options {
   std::string card;       // STORE:ID to restore
   std::string save_card;  // STORE to add a card to
   std::string card_title, card_note;
+  SessionFlags volume_flags;  // --voxel-size, --opacity, --opacity-unit-distance (shared with vxr view)
 };
 
 // What the render resolved, for --save-card.
@@ -156,7 +158,7 @@ using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 // the LOD bias, and writes the last.
 int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context& gpu, bool procedural, uint32_t width,
             uint32_t height, const CameraMaker& make_camera, Resolved* resolved) {
-  auto session = open_volume_session(o.input, {});
+  auto session = open_volume_session(o.input, o.volume_flags);
   if (!session) return fail(session.status(), procedural ? kExitUsage : kExitFailure);
   for (const std::string& n : session->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
   const std::shared_ptr<const ChunkSource> src = session->source;
@@ -434,6 +436,8 @@ int run(const Options& given) {
   }
   if (o.step != 0.0) s.step_voxels = o.step;
   if (!(s.step_voxels > 0.0)) return fail(invalid_argument("--step: must be > 0 voxels"), kExitUsage);
+  if (Status st = apply_opacity_flags(o.volume_flags, s); !st) return fail(st, kExitUsage);
+  if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); !vs) return fail(vs.status(), kExitUsage);
   uint32_t width = 0, height = 0;
   if (std::sscanf(o.size.c_str(), "%ux%u", &width, &height) != 2 || width == 0 || height == 0 || width > 16384 ||
       height > 16384)
@@ -546,6 +550,7 @@ int run(const Options& given) {
   if (!loaded) return fail(loaded.status());
   for (const auto& note : loaded->notes) std::fprintf(stderr, "vxr: note: %s\n", note.c_str());
   std::vector<DenseVolume>& channels = loaded->channels;
+  if (Status st = apply_voxel_size_flag(o.volume_flags, loaded->shrink, channels); !st) return fail(st, kExitUsage);
   std::vector<uint32_t> drawn_channels;
   {
     auto drawn = parse_channels(o.channel, static_cast<uint32_t>(channels.size()));
@@ -607,6 +612,7 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--colormap", o->colormap, "gray, viridis, magma, inferno, plasma, turbo, hot, red, green, blue, cyan, magenta, yellow");
   cmd->add_option("--window", o->window, "lo,hi in data units (default: 0.5..99.5 percentiles)");
   cmd->add_option("--step", o->step, "sample step in voxels");
+  add_volume_flags(cmd, &o->volume_flags);
   cmd->add_option("--channel", o->channel, "channels to draw, e.g. 2 or 0,2 (default: the first up to 4)");
   cmd->add_option("--timepoint", o->timepoint, "timepoint to draw (default 0; out-of-core renderer)");
   cmd->add_option("--path", o->path, "dense renderer: compute (default) or fragment (implies --renderer dense)");

@@ -15,6 +15,7 @@
 #include "command.h"
 #include "core/output_file.h"
 #include "render/volume_session.h"
+#include "volume_flags.h"
 #include "xr/headless/headless_target.h"
 #include "xr/headless/movie.h"
 #include "xr/target_factory.h"
@@ -187,6 +188,7 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--window", o->flags.window, "LO,HI data window (default: from the data)");
   cmd->add_option("--model", o->flags.model, "optical model: ea, emission or mip");
   cmd->add_option("--step", o->flags.step, "samples every STEP voxels (default 0.5)");
+  add_volume_flags(cmd, &o->flags);
   cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
 }
 

@@ -40,6 +40,7 @@ json to_j(const RenderSettings& s) {
           {"blend", blend_name(s.blend)},
           {"step_voxels", s.step_voxels},
           {"density", s.density},
+          {"opacity_unit_distance", s.opacity_unit_distance},
           {"early_termination", s.early_termination},
           {"opacity_correction", s.opacity_correction},
           {"jitter", s.jitter},
@@ -117,6 +118,7 @@ void from_j(const json& j, RenderSettings& s) {
   }
   get(j, "step_voxels", s.step_voxels);
   get(j, "density", s.density);
+  get(j, "opacity_unit_distance", s.opacity_unit_distance);
   get(j, "early_termination", s.early_termination);
   get(j, "opacity_correction", s.opacity_correction);
   get(j, "jitter", s.jitter);
