@@ -192,6 +192,7 @@ TEST_CASE("opacity: vxr render and vxr view refuse a bad --voxel-size or --opaci
            {"render procedural:vessels:64 -o " + out + " --voxel-size 1,0,1", "--voxel-size"},
            {"render procedural:vessels:64 -o " + out + " --opacity 0.5:0,0.2:1", "--opacity"},
            {"render procedural:vessels:64 -o " + out + " --opacity-unit-distance -3", "--opacity-unit-distance"},
+           {"render procedural:vessels:64 -o " + out + " --voxel-size 1,1,2 --save-card " + test::shell_quote((dir / "cards").string()), "--save-card"},
            {"view --sample --headless --frames 1 --voxel-size 1,1,inf", "--voxel-size"},
            {"view --sample --headless --frames 1 --opacity 0:0,1:2", "--opacity"}}) {
     const test::CliRun r = test::run_vxr(c.args, dir, 120);

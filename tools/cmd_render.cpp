@@ -438,6 +438,8 @@ int run(const Options& given) {
   if (!(s.step_voxels > 0.0)) return fail(invalid_argument("--step: must be > 0 voxels"), kExitUsage);
   if (Status st = apply_opacity_flags(o.volume_flags, s); !st) return fail(st, kExitUsage);
   if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); !vs) return fail(vs.status(), kExitUsage);
+  if (!o.volume_flags.voxel_size.empty() && !o.save_card.empty())  // a Scene has no voxel size to restore it from
+    return fail(invalid_argument("--save-card: a card does not store --voxel-size; drop one of them"), kExitUsage);
   uint32_t width = 0, height = 0;
   if (std::sscanf(o.size.c_str(), "%ux%u", &width, &height) != 2 || width == 0 || height == 0 || width > 16384 ||
       height > 16384)
