@@ -7,8 +7,10 @@
 
 #include <cmath>
 #include <algorithm>
+#include <fstream>
 
 #include "cli_runner.h"
+#include "core/image.h"
 #include "golden.h"
 #include "gpu_fixture.h"
 #include "render/lod/brick_renderer.h"
@@ -202,4 +204,41 @@ TEST_CASE("opacity: vxr render and vxr view refuse a bad --voxel-size or --opaci
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   }
   CHECK(!std::filesystem::exists(dir / "x.png"));
+}
+
+TEST_CASE("opacity: vxr render applies --voxel-size and --opacity-unit-distance on both renderers") {
+  const auto dir = test::scratch_dir("opacity", "render");
+  // The blobs as a raw u8 volume with a JSON sidecar (cubic voxels in the file).
+  const DenseVolume f = sampled(1.0);
+  std::string bytes;
+  for (size_t i = 0; i < f.voxel_count(); ++i)
+    bytes.push_back(char(std::lround(255.0 * reinterpret_cast<const float*>(f.data.data())[i])));
+  {
+    std::ofstream(dir / "blobs.u8.raw", std::ios::binary) << bytes;
+    std::ofstream(dir / "blobs.json") << R"({"file": "blobs.u8.raw", "dims": [32, 32, 32], "dtype": "u8", "voxel_size": [1, 1, 1]})";
+  }
+  const std::string in = test::shell_quote((dir / "blobs.json").string());
+  auto render = [&](const std::string& name, const std::string& flags) {
+    const std::string png = (dir / (name + ".png")).string();
+    const test::CliRun r = test::run_vxr("render " + in + " -o " + test::shell_quote(png) +
+                                             " --size 64x64 --window 0,255 --camera 22,18,44,0,0,0,0,1,0 " + flags,
+                                         dir, 300);
+    INFO(name << ": " << r.err);
+    REQUIRE(r.rc == 0);
+    auto img = read_png(png);
+    REQUIRE(img.is_ok());
+    return std::move(img).value();
+  };
+  for (const std::string renderer : {"lod --lod-bias -4", "dense"}) {
+    INFO("--renderer " << renderer);
+    const std::string base = "--renderer " + renderer + " ";
+    // Cubic voxels, one world unit: the per-voxel picture.
+    CHECK(render("cubic", base).pixels == render("cubic_world", base + "--opacity-unit-distance 1").pixels);
+    // Thick z voxels: world-unit opacity absorbs more along z than per-voxel opacity.
+    const ImageRgba8 per_voxel = render("thick", base + "--voxel-size 1,1,2");
+    const ImageRgba8 world = render("thick_world", base + "--voxel-size 1,1,2 --opacity-unit-distance 1");
+    CHECK(diff(per_voxel, world, "1x1x2, per voxel vs per world unit").rmse >= 1.5);
+    // The file's voxel size was overridden: the box is twice as deep, a different picture.
+    CHECK(diff(render("cubic", base), per_voxel, "1x1x1 vs --voxel-size 1,1,2").rmse >= 2.0);
+  }
 }
