@@ -96,7 +96,7 @@ ImageRgba8 bricks(const DenseVolume& v, const RenderSettings& s) {
 
 test::ImageDiff diff(const ImageRgba8& a, const ImageRgba8& b, const char* what) {
   const test::ImageDiff d = test::diff_images(a, b);
-  MESSAGE(what << ": max_abs " << d.max_abs << ", rmse " << d.rmse << ", differing " << d.differing);
+  MESSAGE(std::string(what) << ": max_abs " << d.max_abs << ", rmse " << d.rmse << ", differing " << d.differing);
   return d;
 }
 
