@@ -18,6 +18,7 @@
 #include "render/reference_renderer.h"
 #include "render/transfer_function.h"
 #include "render/volume_session.h"
+#include "scene/render_settings.h"
 #include "volume/dense_chunk_source.h"
 
 using namespace vxr;
@@ -194,7 +195,6 @@ TEST_CASE("opacity: vxr render and vxr view refuse a bad --voxel-size or --opaci
            {"render procedural:vessels:64 -o " + out + " --voxel-size 1,0,1", "--voxel-size"},
            {"render procedural:vessels:64 -o " + out + " --opacity 0.5:0,0.2:1", "--opacity"},
            {"render procedural:vessels:64 -o " + out + " --opacity-unit-distance -3", "--opacity-unit-distance"},
-           {"render procedural:vessels:64 -o " + out + " --voxel-size 1,1,2 --save-card " + test::shell_quote((dir / "cards").string()), "--save-card"},
            {"view --sample --headless --frames 1 --voxel-size 1,1,inf", "--voxel-size"},
            {"view --sample --headless --frames 1 --opacity 0:0,1:2", "--opacity"}}) {
     const test::CliRun r = test::run_vxr(c.args, dir, 120);
@@ -241,4 +241,35 @@ TEST_CASE("opacity: vxr render applies --voxel-size and --opacity-unit-distance 
     // The file's voxel size was overridden: the box is twice as deep, a different picture.
     CHECK(diff(render("cubic", base), per_voxel, "1x1x1 vs --voxel-size 1,1,2").rmse >= 2.0);
   }
+}
+
+TEST_CASE("opacity: a card keeps --voxel-size and the unit distance, and restores the same picture") {
+  const auto dir = test::scratch_dir("opacity", "card");
+  const std::string store = (dir / "store").string();
+  REQUIRE(test::run_vxr("annotate init " + test::shell_quote(store), dir).rc == 0);
+  const test::CliRun a = test::run_vxr("render procedural:vessels:64 -o " + test::shell_quote((dir / "a.png").string()) +
+                                           " --size 64x48 --voxel-size 1,1,2.5 --opacity-unit-distance 0.75 --save-card " +
+                                           test::shell_quote(store),
+                                       dir, 300);
+  INFO(a.err);
+  REQUIRE(a.rc == 0);
+  const test::CliRun b =
+      test::run_vxr("render --card " + test::shell_quote(store + ":1") + " -o " + test::shell_quote((dir / "b.png").string()), dir, 300);
+  INFO(b.err);
+  REQUIRE(b.rc == 0);
+  CHECK(test::read_bytes(dir / "a.png") == test::read_bytes(dir / "b.png"));
+  // Without the card's voxel size the picture differs: the restore did use it.
+  const test::CliRun c = test::run_vxr("render --card " + test::shell_quote(store + ":1") + " --voxel-size 1,1,1 -o " +
+                                           test::shell_quote((dir / "c.png").string()),
+                                       dir, 300);
+  REQUIRE(c.rc == 0);
+  CHECK(test::read_bytes(dir / "a.png") != test::read_bytes(dir / "c.png"));
+  Scene sc;
+  sc.voxel_size = {1.0, 1.0, 2.5};
+  sc.render.opacity_unit_distance = 0.75;
+  auto back = scene_from_json(scene_to_json(sc));
+  REQUIRE(back.is_ok());
+  CHECK(*back == sc);
+  CHECK(!scene_from_json(R"({"voxel_size": [1, 0, 1]})").is_ok());
+  CHECK(scene_from_json("{}").value().voxel_size == std::array<double, 3>{0, 0, 0});
 }

@@ -341,6 +341,7 @@ int save_card(const Options& o, Scene sc, const Resolved& r, uint32_t width, uin
   sc.renderer = r.renderer;
   sc.path = r.renderer == "dense" ? o.path : "";
   sc.lod_bias = r.renderer == "lod" ? o.lod_bias : 0.0;
+  if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); vs.is_ok() && vs->has_value()) sc.voxel_size = **vs;
   sc.render = r.settings;
   auto png = annotate::read_whole_file(o.output);
   if (!png) return fail(png.status());
@@ -375,6 +376,7 @@ int run(const Options& given) {
     if (o.renderer.empty()) o.renderer = sc.renderer;
     if (!o.path_given && !sc.path.empty()) o.path = sc.path;
     if (!o.lod_bias_given && sc.lod_bias != 0.0) o.lod_bias = sc.lod_bias, o.lod_bias_given = true;
+    if (o.volume_flags.voxel_size.empty() && sc.voxel_size[0] > 0.0) o.volume_flags.voxel_size = voxel_size_text(sc.voxel_size);
   };
   if (!o.card.empty()) {
     if (!o.settings_path.empty()) return fail(invalid_argument("give --card or --settings, not both"), kExitUsage);
@@ -438,8 +440,6 @@ int run(const Options& given) {
   if (!(s.step_voxels > 0.0)) return fail(invalid_argument("--step: must be > 0 voxels"), kExitUsage);
   if (Status st = apply_opacity_flags(o.volume_flags, s); !st) return fail(st, kExitUsage);
   if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); !vs) return fail(vs.status(), kExitUsage);
-  if (!o.volume_flags.voxel_size.empty() && !o.save_card.empty())  // a Scene has no voxel size to restore it from
-    return fail(invalid_argument("--save-card: a card does not store --voxel-size; drop one of them"), kExitUsage);
   uint32_t width = 0, height = 0;
   if (std::sscanf(o.size.c_str(), "%ux%u", &width, &height) != 2 || width == 0 || height == 0 || width > 16384 ||
       height > 16384)

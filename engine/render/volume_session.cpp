@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "assets/assets.h"
@@ -89,6 +90,12 @@ Result<std::optional<std::array<double, 3>>> parse_voxel_size_flag(const std::st
   if (!ok || n != 3 || text.back() == ',')
     return invalid_argument("--voxel-size: '" + text + "' is not X,Y,Z with three finite numbers > 0 (world units per voxel)");
   return std::optional<std::array<double, 3>>(v);
+}
+
+std::string voxel_size_text(const std::array<double, 3>& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g", v[0], v[1], v[2]);
+  return buf;
 }
 
 Status apply_opacity_flags(const SessionFlags& f, RenderSettings& s) {

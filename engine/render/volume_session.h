@@ -51,6 +51,9 @@ RenderSettings default_view_settings();
 // --voxel-size: three finite numbers > 0, or nullopt when the flag is empty.
 Result<std::optional<std::array<double, 3>>> parse_voxel_size_flag(const std::string& text);
 
+// The --voxel-size text of `v`, exact (17 significant digits), e.g. for a card's voxel size.
+std::string voxel_size_text(const std::array<double, 3>& v);
+
 // --opacity LO:A,HI:B (LO < HI window fractions in 0..1, A and B opacities in
 // 0..1): every channel's opacity is 0 below LO, rises linearly from A at LO
 // to B at HI and stays B above. --opacity-unit-distance D (>= 0, finite).

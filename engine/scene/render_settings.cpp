@@ -204,6 +204,7 @@ std::string scene_to_json(const Scene& s) {
             {"path", s.path},
             {"lod_bias", s.lod_bias},
             {"render", to_j(s.render)}};
+  if (s.voxel_size != std::array<double, 3>{0, 0, 0}) j["voxel_size"] = s.voxel_size;  // older readers ignore it
   if (s.has_camera)
     j["camera"] = {{"eye", s.camera.eye}, {"target", s.camera.target}, {"up", s.camera.up}, {"fov_y_deg", s.camera.fov_y_deg}};
   return j.dump(2);
@@ -244,6 +245,11 @@ Result<Scene> scene_from_json(const std::string& text) {
     get(j, "lod_bias", s.lod_bias);
     if (!(std::isfinite(s.lod_bias) && std::abs(s.lod_bias) <= 16.0))
       throw KeyError{"lod_bias must be within -16..16"};
+    get(j, "voxel_size", s.voxel_size);
+    if (s.voxel_size != std::array<double, 3>{0, 0, 0})
+      for (double v : s.voxel_size)
+        if (!(v > 0.0 && std::isfinite(v)))
+          throw KeyError{"voxel_size must be three positive finite numbers (world units per voxel), or absent"};
     if (j.contains("camera")) {
       const json& c = j.at("camera");
       s.has_camera = true;
