@@ -149,6 +149,21 @@ TEST_CASE("playback clock: upcoming lists the next timepoints in play order") {
   CHECK(once.upcoming(3) == std::vector<uint32_t>{4});
 }
 
+TEST_CASE("playback clock: while waiting on a due timepoint past the prefetch window, upcoming starts there") {
+  // A late first frame makes timepoint 7 due at once; if upcoming kept listing
+  // from the shown one (1, 2, 3), timepoint 7 would never be loaded.
+  PlaybackClock clock(10, {.fps = 10});
+  clock.play(0.0);
+  clock.tick(0.0, always_ready);  // shows 0
+  const auto only = [](uint32_t ok) { return [ok](uint32_t t) { return t == ok; }; };
+  CHECK_FALSE(clock.tick(0.75, only(0)).is_new);  // 7 is due, not loaded: wait
+  CHECK(clock.upcoming(3) == std::vector<uint32_t>{7, 8, 9});
+  const auto f = clock.tick(0.8, only(7));
+  CHECK(f.is_new);
+  CHECK(f.timepoint == 7);
+  CHECK(f.dropped == 6);
+}
+
 TEST_CASE("timepoint prefetcher: queues the nearest timepoints within its budget share, cancels stale ones") {
   auto source = std::make_shared<TimeSource>();
   const uint64_t chunk_bytes = 1000 + sizeof(Chunk) + 64;
@@ -261,4 +276,28 @@ TEST_CASE("play headless: looping plays in order within every loop") {
   CHECK(doc["loops"].get<uint64_t>() >= loops.size() - 1);  // a very slow frame may skip a whole loop
   for (const auto& l : loops)
     for (size_t i = 1; i < l.size(); ++i) CHECK(l[i] > l[i - 1]);
+}
+
+TEST_CASE("bench movie: a movie longer than the cache is read again every loop; render run counts every timepoint") {
+  // 6 timepoints, prefetch 1: the cache holds 2 x 2 volumes, so each of the 2
+  // loops reads and decodes all 6 again (evictions), and the played run
+  // shows or drops each timepoint exactly once.
+  const std::filesystem::path dir = vxr::test::scratch_dir("playback", "bench_movie");
+  const auto run = vxr::test::run_vxr("bench movie --dims 48 40 36 --timepoints 6 --prefetch 1 --loops 2 --size 32 "
+                                      "--fps 1000 --out " + vxr::test::shell_quote(dir.string()),
+                                      dir, 300);
+  REQUIRE_MESSAGE(run.rc == 0, run.err);
+  std::ifstream f(dir / "movie.json");
+  const auto doc = nlohmann::json::parse(f);
+  CHECK(doc["timepoints"].get<uint32_t>() == 6);
+  CHECK(doc["data_path_volumes_per_s"].get<double>() > 0);
+  CHECK(doc["lz4_decode_bound_volumes_per_s"].get<double>() > 0);
+  CHECK(doc["per_volume_ms"].size() == 12);
+  const auto chunks = doc["level0_chunks_per_volume"].get<uint64_t>();
+  CHECK(doc["cache"]["loads"].get<uint64_t>() >= 2 * 6 * chunks);
+  CHECK(doc["cache"]["evictions"].get<uint64_t>() > 0);
+  CHECK(doc["uploaded_bytes"].get<uint64_t>() > 0);
+  CHECK(doc["render_volumes_per_s"].get<double>() > 0);
+  CHECK(doc["shown"].get<uint64_t>() >= 1);
+  CHECK(doc["shown"].get<uint64_t>() + doc["dropped"].get<uint64_t>() == 6);
 }
