@@ -158,10 +158,12 @@ using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 // the LOD bias, and writes the last.
 int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context& gpu, bool procedural, uint32_t width,
             uint32_t height, const CameraMaker& make_camera, Resolved* resolved) {
-  auto session = open_volume_session(o.input, o.volume_flags);
+  auto session = open_volume_session(o.input, {});
   if (!session) return fail(session.status(), procedural ? kExitUsage : kExitFailure);
   for (const std::string& n : session->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
-  const std::shared_ptr<const ChunkSource> src = session->source;
+  std::shared_ptr<const ChunkSource> src = session->source;
+  if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); vs.is_ok() && vs->has_value())
+    src = with_voxel_size(src, **vs);
   if (procedural && !window_given) {  // `vxr bench lod`'s: above the background noise (0..6)
     s.channels[0].window_lo = 8;
     s.channels[0].window_hi = 200;
@@ -373,10 +375,10 @@ int run(const Options& given) {
     }
     if (!o.size_given && sc.viewport[0] > 0)
       o.size = std::to_string(sc.viewport[0]) + "x" + std::to_string(sc.viewport[1]);
+    if (o.volume_flags.voxel_size.empty() && sc.voxel_size[0] > 0.0) o.volume_flags.voxel_size = voxel_size_text(sc.voxel_size);
     if (o.renderer.empty()) o.renderer = sc.renderer;
     if (!o.path_given && !sc.path.empty()) o.path = sc.path;
     if (!o.lod_bias_given && sc.lod_bias != 0.0) o.lod_bias = sc.lod_bias, o.lod_bias_given = true;
-    if (o.volume_flags.voxel_size.empty() && sc.voxel_size[0] > 0.0) o.volume_flags.voxel_size = voxel_size_text(sc.voxel_size);
   };
   if (!o.card.empty()) {
     if (!o.settings_path.empty()) return fail(invalid_argument("give --card or --settings, not both"), kExitUsage);

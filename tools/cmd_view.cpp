@@ -13,9 +13,9 @@
 #include <nlohmann/json.hpp>
 
 #include "command.h"
+#include "volume_flags.h"
 #include "core/output_file.h"
 #include "render/volume_session.h"
-#include "volume_flags.h"
 #include "xr/headless/headless_target.h"
 #include "xr/headless/movie.h"
 #include "xr/target_factory.h"
@@ -186,9 +186,9 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--fps", o->fps, "--movie: frames per second (default 30)")->check(CLI::Range(0.001, 1000.0));
   cmd->add_option("--colormap", o->flags.colormap, "colormap name (default hot)");
   cmd->add_option("--window", o->flags.window, "LO,HI data window (default: from the data)");
+  add_volume_flags(cmd, &o->flags);
   cmd->add_option("--model", o->flags.model, "optical model: ea, emission or mip");
   cmd->add_option("--step", o->flags.step, "samples every STEP voxels (default 0.5)");
-  add_volume_flags(cmd, &o->flags);
   cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
 }
 

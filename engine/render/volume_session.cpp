@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 
 #include "assets/assets.h"
@@ -93,9 +92,10 @@ Result<std::optional<std::array<double, 3>>> parse_voxel_size_flag(const std::st
 }
 
 std::string voxel_size_text(const std::array<double, 3>& v) {
-  char buf[96];
-  std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g", v[0], v[1], v[2]);
-  return buf;
+  std::ostringstream ss;
+  ss.precision(17);
+  ss << v[0] << ',' << v[1] << ',' << v[2];
+  return ss.str();
 }
 
 Status apply_opacity_flags(const SessionFlags& f, RenderSettings& s) {

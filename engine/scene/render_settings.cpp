@@ -204,9 +204,9 @@ std::string scene_to_json(const Scene& s) {
             {"path", s.path},
             {"lod_bias", s.lod_bias},
             {"render", to_j(s.render)}};
-  if (s.voxel_size != std::array<double, 3>{0, 0, 0}) j["voxel_size"] = s.voxel_size;  // older readers ignore it
   if (s.has_camera)
     j["camera"] = {{"eye", s.camera.eye}, {"target", s.camera.target}, {"up", s.camera.up}, {"fov_y_deg", s.camera.fov_y_deg}};
+  if (s.voxel_size != std::array<double, 3>{0, 0, 0}) j["voxel_size"] = s.voxel_size;  // older readers ignore it
   return j.dump(2);
 }
 
