@@ -5,6 +5,7 @@
 
 #include <set>
 
+#include "volume/dense_chunk_source.h"
 #include "volume/chunk_cache.h"
 #include "volume/playback.h"
 
@@ -300,4 +301,44 @@ TEST_CASE("bench movie: a movie longer than the cache is read again every loop; 
   CHECK(doc["render_volumes_per_s"].get<double>() > 0);
   CHECK(doc["shown"].get<uint64_t>() >= 1);
   CHECK(doc["shown"].get<uint64_t>() + doc["dropped"].get<uint64_t>() == 6);
+}
+
+TEST_CASE("dense chunk source: a time series serves each timepoint's own voxels and ranges") {
+  std::vector<std::vector<vxr::DenseVolume>> series;
+  for (uint8_t t = 0; t < 3; ++t) {
+    vxr::DenseVolume v;
+    v.dims = {70, 9, 5};  // two chunks along x at chunk size 64
+    v.dtype = vxr::DType::kU8;
+    v.data.assign(v.byte_size(), uint8_t(10 * (t + 1)));
+    v.data[0] = uint8_t(200 + t);  // one voxel marks the timepoint in chunk (0,0,0)
+    series.push_back({v});
+  }
+  auto src = vxr::DenseChunkSource::create_series(std::move(series));
+  REQUIRE(src);
+  CHECK((*src)->info().timepoints == 3);
+  for (uint32_t t = 0; t < 3; ++t) {
+    auto c = (*src)->read({0, 0, 0, 0, 0, t});
+    REQUIRE(c);
+    const uint32_t a = (*src)->apron(), e = (*c)->edge;
+    CHECK((*c)->data[(size_t(a) * e + a) * e + a] == 200 + t);  // voxel (0,0,0) of the interior
+    auto far = (*src)->stats({0, 1, 0, 0, 0, t});
+    REQUIRE(far);
+    CHECK(far->min == 10 * (t + 1));
+    CHECK(far->max == 10 * (t + 1));
+  }
+  CHECK_FALSE((*src)->read({0, 0, 0, 0, 0, 3}));  // past the last timepoint
+}
+
+TEST_CASE("play headless: an OME-TIFF time series plays without import, every timepoint shown or dropped once") {
+  const std::string tif = std::string(VXR_TESTDATA_DIR) + "/ome-tiff/multi-channel-time-series.ome.tif";
+  const auto doc = play(tif, "ome_tiff_direct", "--fps 4");
+  REQUIRE(doc["timepoints"].get<uint32_t>() == 7);
+  const auto loops = loops_of(doc);
+  REQUIRE(loops.size() == 1);
+  const auto& shown = loops[0];
+  REQUIRE(shown.size() >= 2);
+  CHECK(shown.front() == 0);
+  CHECK(shown.back() == 6);
+  for (size_t i = 1; i < shown.size(); ++i) CHECK(shown[i] > shown[i - 1]);
+  CHECK(doc["dropped"].get<uint64_t>() + shown.size() == 7);
 }

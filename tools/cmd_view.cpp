@@ -10,11 +10,13 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "command.h"
 #include "volume_flags.h"
 #include "core/output_file.h"
+#include "render/annotation_renderer.h"
 #include "render/volume_session.h"
 #include "xr/headless/headless_target.h"
 #include "xr/headless/movie.h"
@@ -42,6 +44,8 @@ struct Options {
   std::string movie;
   double fps = 30.0;
   SessionFlags flags;
+  std::string card;  // STORE:ID or ID
+  bool lod_bias_given = false;
 };
 
 // --movie: a scratch folder for the frames, beside the movie ("<dir>/.<name>.frames.XXXXXX").
@@ -54,7 +58,28 @@ Result<std::string> movie_scratch_dir(const std::string& movie) {
   return templ;
 }
 
-int run(const Options& o) {
+int run(const Options& given) {
+  Options o = given;
+  std::optional<Scene> card;
+  if (!o.card.empty()) {
+    if (!o.flags.colormap.empty() || !o.flags.window.empty() || !o.flags.model.empty() || o.flags.step != 0.0)
+      return fail(invalid_argument("--card restores the card's render settings; drop --colormap/--window/--model/--step "
+                                   "(vxr render --card takes them as overrides)"),
+                  kExitUsage);
+    if (!o.movie.empty()) return fail(invalid_argument("--card and --movie: give one"), kExitUsage);
+    auto sc = load_card_scene(o.card, o.flags.annotations, o.input);
+    if (!sc) {
+      const ErrorCode c = sc.status().code();
+      return fail(sc.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage : kExitFailure);
+    }
+    if (o.input.empty() && !o.sample) o.input = sc->volume;
+    if (o.flags.annotations.empty()) o.flags.annotations = sc->annotations;
+    if (!o.lod_bias_given) o.lod_bias = sc->lod_bias;
+    if (sc->renderer == "dense")
+      std::fprintf(stderr, "vxr view: note: card %s was drawn by the dense renderer; the view draws it out of core\n",
+                   o.card.c_str());
+    card = *sc;
+  }
   if (o.frame_budget_ms < 0.0) return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
   if (!o.json.empty()) {
     const std::string inputs[] = {o.input};
@@ -81,7 +106,7 @@ int run(const Options& o) {
   }
   for (const std::string& n : session->notes)
     std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
-  if (const VolumeInfo& info = session->source->info(); info.channels > 1 || info.timepoints > 1)
+  if (const VolumeInfo& info = session->source->info(); !card && (info.channels > 1 || info.timepoints > 1))
     std::fprintf(stderr, "vxr view: %s: showing channel 0 of timepoint 0 (of %u channels, %u timepoints)\n",
                  o.input.c_str(), unsigned(info.channels), unsigned(info.timepoints));
   xr::TargetRequest req;
@@ -114,20 +139,44 @@ int run(const Options& o) {
   req.max_eye_width = o.width;
   req.max_eye_height = o.height;
 
+  const VolumeInfo& info = session->source->info();
+  const VolumePlacement placement{{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])},
+                                  info.voxel_size};
+  if (card) {
+    if (card->timepoint >= info.timepoints)
+      return fail(invalid_argument("--card: timepoint " + std::to_string(card->timepoint) + ", but " + o.input +
+                                   " has " + std::to_string(info.timepoints)),
+                  kExitUsage);
+    // One view with the card's camera and size, as vxr render --card draws it
+    // (a headset or window keeps its own eye size).
+    req.headless.stereo = false;
+    if (!o.width && card->viewport[0] > 0) req.headless.script.width = card->viewport[0];
+    if (!o.height && card->viewport[1] > 0) req.headless.script.height = card->viewport[1];
+    req.headless.camera = scene_camera(*card, placement, info.dims[2] == 1);
+  }
+
   auto choice = xr::choose_target(req);
   if (!choice) return fail(choice.status(), kExitFailure);
   std::printf("vxr view: %s\n", choice->reason.c_str());
   std::fflush(stdout);
 
+  if (card && choice->kind != xr::TargetKind::kHeadless)
+    std::fprintf(stderr, "vxr view: note: --card: settings, channels, timepoint and annotations restored; the card's "
+                         "camera is restored headless only (a headset or window keeps its own pose)\n");
+
   xr::ViewOptions vo;
   vo.frames = o.frames;
-  vo.settings = session->settings;
+  vo.settings = card ? card->render : session->settings;
+  if (card) vo.channels = card->channels;
   vo.warp.enabled = o.lens_warp;
   vo.frame.lod.lod_bias = o.lod_bias;
+  vo.frame.lod.timepoint = card ? card->timepoint : 0;
   vo.frame_budget_ms = o.frame_budget_ms;
-  const VolumeInfo& info = session->source->info();
-  const VolumePlacement placement{{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])},
-                                  info.voxel_size};
+  if (!session->annotation_store.empty()) {
+    auto annotations = load_annotation_scene(session->annotation_store, placement, vo.frame.lod.timepoint);
+    if (!annotations) return fail(annotations.status());
+    vo.annotations = std::move(annotations).value();
+  }
   auto stats = xr::run_view(choice->factory, session->source, vo, xr::default_volume_transform(placement));
   if (!stats) return fail(stats.status());
   if (!o.movie.empty()) {
@@ -184,12 +233,19 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--movie", o->movie,
                   "headless: render the pose script's camera path (one view) and write it as an MP4 (needs ffmpeg)");
   cmd->add_option("--fps", o->fps, "--movie: frames per second (default 30)")->check(CLI::Range(0.001, 1000.0));
+  add_annotations_option(cmd, o->flags.annotations);
+  cmd->add_option("--card", o->card,
+                  "STORE:ID (or ID of the --annotations store or the input project's): restore a card's volume, "
+                  "settings, channels, timepoint and annotations; headless, its exact camera and size too");
   cmd->add_option("--colormap", o->flags.colormap, "colormap name (default hot)");
   cmd->add_option("--window", o->flags.window, "LO,HI data window (default: from the data)");
   add_volume_flags(cmd, &o->flags);
   cmd->add_option("--model", o->flags.model, "optical model: ea, emission or mip");
   cmd->add_option("--step", o->flags.step, "samples every STEP voxels (default 0.5)");
-  cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
+  cmd->callback([&inv, o, cmd] {
+    o->lod_bias_given = cmd->count("--lod-bias") > 0;
+    inv.run = [o] { return run(*o); };
+  });
 }
 
 }  // namespace vxr::cli

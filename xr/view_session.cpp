@@ -78,7 +78,8 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
   Detach detach{target};
   ChunkCache cache(source, {options.cache_bytes, options.loader_threads});
   VXR_RETURN_IF_ERROR(target.attach(*ctx));
-  VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, source, &cache));
+  VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, source, &cache, options.channels));
+  VXR_RETURN_IF_ERROR(eyes->set_annotations(options.annotations));
   // Pool changes the settings need (apron 2 for gradients) before any frame records.
   VXR_RETURN_IF_ERROR(eyes->renderer().prepare(options.settings));
   VXR_RETURN_IF_ERROR(commands.create(*ctx));
@@ -203,7 +204,7 @@ nlohmann::json view_stats_json(const ViewStats& s, const ViewOptions& o) {
 Result<ViewStats> run_view(const TargetFactory& make_target, std::shared_ptr<const ChunkSource> source,
                            const ViewOptions& options, const VolumeTransform& initial) {
   if (!source) return invalid_argument("view: no volume");
-  VXR_RETURN_IF_ERROR(check_brick_settings(options.settings));
+  VXR_RETURN_IF_ERROR(check_brick_settings(options.settings, uint32_t(std::max<size_t>(1, options.channels.size()))));
   ViewStats stats;
   stats.transform = initial;
   GrabInteraction grab;

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
+#include "annotate/project.h"
 #include "assets/assets.h"
 #include "render/transfer_function.h"
 #include "volume/container_reader.h"
@@ -198,8 +200,19 @@ Result<std::unique_ptr<ProceduralSource>> open_procedural(const std::string& spe
   return src;
 }
 
-Result<VolumeSession> open_volume_session(const std::string& input, const SessionFlags& flags) {
+Result<VolumeSession> open_volume_session(const std::string& given, const SessionFlags& flags) {
   VolumeSession out;
+  std::string input = given;
+  out.annotation_store = flags.annotations;
+  // A project folder: its volume, and its store unless another was named.
+  std::error_code ec;
+  if (!input.empty() && std::filesystem::exists(std::filesystem::path(input) / "project.json", ec)) {
+    VXR_ASSIGN_OR_RETURN(annotate::ProjectInfo project, annotate::read_project(input));
+    if (out.annotation_store.empty()) out.annotation_store = (std::filesystem::path(input) / project.annotations).string();
+    input = (std::filesystem::path(input) / project.volume).string();
+  }
+  if (!out.annotation_store.empty() && !std::filesystem::is_directory(out.annotation_store, ec))
+    return not_found(out.annotation_store + ": no annotation store here (make one with `vxr annotate init`)");
   out.settings = default_view_settings();
   // Flags first: a bad flag is reported before any file is read.
   VXR_ASSIGN_OR_RETURN(const auto voxel_size, parse_voxel_size_flag(flags.voxel_size));
@@ -231,7 +244,10 @@ Result<VolumeSession> open_volume_session(const std::string& input, const Sessio
     VXR_ASSIGN_OR_RETURN(LoadedVolume loaded, load_for_render(input, 1u << 20, flags.max_dense_bytes));
     out.notes = loaded.notes;
     out.description = input + " (" + loaded.format + ")";
-    VXR_ASSIGN_OR_RETURN(out.source, DenseChunkSource::create(std::move(loaded.channels)));
+    std::vector<std::vector<DenseVolume>> series;
+    series.push_back(std::move(loaded.channels));
+    for (auto& t : loaded.later_timepoints) series.push_back(std::move(t));
+    VXR_ASSIGN_OR_RETURN(out.source, DenseChunkSource::create_series(std::move(series)));
   }
   if (voxel_size) out.source = with_voxel_size(out.source, *voxel_size);
   const VolumeInfo& info = out.source->info();

@@ -126,6 +126,7 @@ struct Scene {
   std::string renderer;  // "lod", "dense" or "" (the default for the input)
   std::string path;      // dense renderer's "compute" or "fragment"; "" = compute
   double lod_bias = 0.0;  // lod renderer: log2 voxels per pixel accepted
+  std::string annotations;  // annotation store drawn with the volume (absolute path); "": none or the project's
   RenderSettings render;
   // World units per voxel replacing the input's own (--voxel-size); all 0: the input's.
   std::array<double, 3> voxel_size{0, 0, 0};

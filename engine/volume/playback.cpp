@@ -76,6 +76,7 @@ PlaybackFrame PlaybackClock::tick(double now, const std::function<bool(uint32_t)
     frame.is_new = true;
     ++counters_.shown;
     if (playing_) anchor(now);
+    if (!options_.loop && current_ + 1 >= count_) playing_ = false;  // the last (or only) timepoint
     return frame;
   }
   if (!playing_) return frame;
