@@ -90,7 +90,7 @@ vec4 pack_ray(VxrRay r) {
 }
 
 VxrRay unpack_ray(vec4 v) {
-  VxrRay r = vxr_begin(P);
+  VxrRay r = vxr_begin(P, g_dir);
   const uint m = VXR_SC_MODEL;
   if (m == VXR_MODEL_MIP || m == VXR_MODEL_MINIP) {
     r.reduce.x = v.x;
@@ -247,7 +247,7 @@ void main() {
   // A work item's pixel that misses its brick leaves the accumulation alone.
   if (item_mode && !segment(first, dir, t0, t1)) return;
 
-  VxrRay ray = vxr_begin(P);
+  VxrRay ray = vxr_begin(P, dir);
   if ((flags & VXR_BRICK_LOAD_ACCUM) != 0u) ray = unpack_ray(imageLoad(accum_image, ivec2(pix)));
   if (item_mode && ray.done) return;  // terminated earlier: nothing to add
   uint taken = 0u;

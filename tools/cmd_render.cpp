@@ -45,6 +45,7 @@
 #include "volume/load_dense.h"
 #include "volume/open_chunk_source.h"
 #include "volume/procedural_source.h"
+#include "volume_flags.h"
 
 namespace vxr::cli {
 namespace {
@@ -66,6 +67,7 @@ struct Options {
   std::string card;       // STORE:ID to restore
   std::string save_card;  // STORE to add a card to
   std::string card_title, card_note;
+  SessionFlags volume_flags;  // --voxel-size, --opacity, --opacity-unit-distance (shared with vxr view)
 };
 
 // What the render resolved, for --save-card.
@@ -163,7 +165,9 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   auto session = open_volume_session(o.input, flags);
   if (!session) return fail(session.status(), procedural ? kExitUsage : kExitFailure);
   for (const std::string& n : session->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
-  const std::shared_ptr<const ChunkSource> src = session->source;
+  std::shared_ptr<const ChunkSource> src = session->source;
+  if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); vs.is_ok() && vs->has_value())
+    src = with_voxel_size(src, **vs);
   if (procedural && !window_given) {  // `vxr bench lod`'s: above the background noise (0..6)
     s.channels[0].window_lo = 8;
     s.channels[0].window_hi = 200;
@@ -340,6 +344,7 @@ int save_card(const Options& o, Scene sc, const Resolved& r, uint32_t width, uin
   sc.renderer = r.renderer;
   sc.path = r.renderer == "dense" ? o.path : "";
   sc.lod_bias = r.renderer == "lod" ? o.lod_bias : 0.0;
+  if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); vs.is_ok() && vs->has_value()) sc.voxel_size = **vs;
   sc.render = r.settings;
   sc.annotations = o.annotations.empty() ? "" : std::filesystem::absolute(o.annotations, ec).lexically_normal().string();
   auto png = annotate::read_whole_file(o.output);
@@ -372,6 +377,7 @@ int run(const Options& given) {
     }
     if (!o.size_given && sc.viewport[0] > 0)
       o.size = std::to_string(sc.viewport[0]) + "x" + std::to_string(sc.viewport[1]);
+    if (o.volume_flags.voxel_size.empty() && sc.voxel_size[0] > 0.0) o.volume_flags.voxel_size = voxel_size_text(sc.voxel_size);
     if (o.renderer.empty()) o.renderer = sc.renderer;
     if (!o.path_given && !sc.path.empty()) o.path = sc.path;
     if (!o.lod_bias_given && sc.lod_bias != 0.0) o.lod_bias = sc.lod_bias, o.lod_bias_given = true;
@@ -437,6 +443,8 @@ int run(const Options& given) {
   }
   if (o.step != 0.0) s.step_voxels = o.step;
   if (!(s.step_voxels > 0.0)) return fail(invalid_argument("--step: must be > 0 voxels"), kExitUsage);
+  if (Status st = apply_opacity_flags(o.volume_flags, s); !st) return fail(st, kExitUsage);
+  if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); !vs) return fail(vs.status(), kExitUsage);
   uint32_t width = 0, height = 0;
   if (std::sscanf(o.size.c_str(), "%ux%u", &width, &height) != 2 || width == 0 || height == 0 || width > 16384 ||
       height > 16384)
@@ -551,6 +559,7 @@ int run(const Options& given) {
   if (!loaded) return fail(loaded.status());
   for (const auto& note : loaded->notes) std::fprintf(stderr, "vxr: note: %s\n", note.c_str());
   std::vector<DenseVolume>& channels = loaded->channels;
+  if (Status st = apply_voxel_size_flag(o.volume_flags, loaded->shrink, channels); !st) return fail(st, kExitUsage);
   std::vector<uint32_t> drawn_channels;
   {
     auto drawn = parse_channels(o.channel, static_cast<uint32_t>(channels.size()));
@@ -612,6 +621,7 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--colormap", o->colormap, "gray, viridis, magma, inferno, plasma, turbo, hot, red, green, blue, cyan, magenta, yellow");
   cmd->add_option("--window", o->window, "lo,hi in data units (default: 0.5..99.5 percentiles)");
   cmd->add_option("--step", o->step, "sample step in voxels");
+  add_volume_flags(cmd, &o->volume_flags);
   cmd->add_option("--channel", o->channel, "channels to draw, e.g. 2 or 0,2 (default: the first up to 4)");
   cmd->add_option("--timepoint", o->timepoint, "timepoint to draw (default 0; out-of-core renderer)");
   cmd->add_option("--path", o->path, "dense renderer: compute (default) or fragment (implies --renderer dense)");

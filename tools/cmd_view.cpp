@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "command.h"
+#include "volume_flags.h"
 #include "core/output_file.h"
 #include "render/annotation_renderer.h"
 #include "render/volume_session.h"
@@ -238,6 +239,7 @@ void add_view_command(CLI::App& app, Invocation& inv) {
                   "settings, channels, timepoint and annotations; headless, its exact camera and size too");
   cmd->add_option("--colormap", o->flags.colormap, "colormap name (default hot)");
   cmd->add_option("--window", o->flags.window, "LO,HI data window (default: from the data)");
+  add_volume_flags(cmd, &o->flags);
   cmd->add_option("--model", o->flags.model, "optical model: ea, emission or mip");
   cmd->add_option("--step", o->flags.step, "samples every STEP voxels (default 0.5)");
   cmd->callback([&inv, o, cmd] {

@@ -26,6 +26,9 @@ RaycastSetup plan_raycast(const Camera& camera, const RenderSettings& s, const V
   r.density = s.density;
   r.epsilon = s.early_termination;
   r.opacity_correction = s.opacity_correction;
+  if (s.opacity_unit_distance > 0.0)
+    r.world_opacity = glm::dvec3(placement.voxel_size[0], placement.voxel_size[1], placement.voxel_size[2]) /
+                      s.opacity_unit_distance;
   r.jitter = s.jitter;
   r.sample_offset = s.sample_offset;
   r.iso_channel = s.iso_channel;
@@ -54,6 +57,11 @@ RaycastSetup plan_raycast(const Camera& camera, const RenderSettings& s, const V
   return r;
 }
 
+double ray_density(const RaycastSetup& r, const glm::dvec3& dir) {
+  if (r.world_opacity == glm::dvec3(0.0)) return r.density;
+  return r.density * glm::length(dir * r.world_opacity);
+}
+
 shader::RaycastParams pack_params(const RaycastSetup& r, bool has_depth_image) {
   auto v4 = [](const glm::dvec3& v, double w = 0.0) { return glm::vec4(glm::dvec4(v, w)); };
   shader::RaycastParams p{};
@@ -67,6 +75,7 @@ shader::RaycastParams pack_params(const RaycastSetup& r, bool has_depth_image) {
   p.shading = glm::vec4(glm::dvec4(r.shading.shininess, has_depth_image ? 1.0 : 0.0, 0.0, 0.0));
   p.depth = glm::vec4(glm::dvec4(static_cast<double>(r.depth_mode), r.depth_lo, r.depth_hi, 0.0));
   p.gradient = glm::vec4(glm::dvec4(r.gradient ? 1.0 : 0.0, r.gradient_lo, r.gradient_hi, 0.0));
+  p.world_opacity = v4(r.world_opacity);
   uint32_t model = VXR_MODEL_EMISSION_ABSORPTION;
   switch (r.model) {
     case OpticalModel::kEmissionAbsorption: model = VXR_MODEL_EMISSION_ABSORPTION; break;

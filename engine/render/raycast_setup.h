@@ -23,6 +23,11 @@ struct RaycastSetup {
   ChannelBlend blend = ChannelBlend::kAdditive;
   double step = 0.5, density = 0.25, epsilon = 1.0 / 512.0;
   bool opacity_correction = true;
+  // Opacity per world unit (settings.opacity_unit_distance > 0): world units
+  // per voxel along each axis divided by the unit distance; a ray with unit
+  // voxel-space direction d then has extinction density * |d * this| per
+  // voxel of t. Zero: per-voxel opacity, density as is.
+  glm::dvec3 world_opacity{0.0};
   bool jitter = false;
   double sample_offset = 0.5;
   double iso_norm = 0.5;  // the iso value, windowed and gamma'd like the samples
@@ -39,6 +44,11 @@ struct RaycastSetup {
 // R8_UNORM texture, 65535 for u16, 1 for float textures).
 RaycastSetup plan_raycast(const Camera& camera, const RenderSettings& s, const VolumePlacement& placement,
                           std::span<const double> value_scales, uint32_t width, uint32_t height);
+
+// The extinction at TF opacity 1 per unit of ray parameter t along the unit
+// voxel-space direction `dir`: the density, scaled by the physical length of
+// one voxel of t in world-unit opacity. The GPU repeats it (vxr_ray_density).
+double ray_density(const RaycastSetup& r, const glm::dvec3& dir);
 
 shader::RaycastParams pack_params(const RaycastSetup& r, bool has_depth_image);
 

@@ -50,6 +50,7 @@ struct Ray {
   dvec4 reduce_depth{0.0};
   double count = 0.0;
   double prev_value = -1.0, prev_t = 0.0, hit_t = -1.0;
+  double density = 0.0;  // extinction at TF opacity 1 per unit of t (ray_density)
   bool done = false;
 };
 
@@ -130,7 +131,7 @@ class Tracer {
       if (s_.window[c].w == 0.0) continue;
       const dvec4 tf = tf_.lookup(c, x[c]);
       const dvec3 color = depth_color ? dvec3(tf_.lookup(c, dc)) : dvec3(tf);
-      const double tau = tf.a * gfac[c] * s_.density * seg;
+      const double tau = tf.a * gfac[c] * r.density * seg;
       if (m == OpticalModel::kEmission) {
         r.acc[c] += dvec4(color * tau, 0.0);
       } else if (s_.blend == ChannelBlend::kAdditive) {
@@ -222,6 +223,7 @@ class Tracer {
     }
     if (!(t1 > t0)) return dvec4(0.0);
     Ray r;
+    r.density = ray_density(s_, dir);
     if (s_.model == OpticalModel::kMinIp) r.reduce = dvec4(1.0);
     if (opt_.grid_from_eye) {
       const double i0 = std::ceil(t0 / step_ - 0.5), i1 = std::ceil(t1 / step_ - 0.5);

@@ -59,6 +59,9 @@ Status validate_render_settings(const RenderSettings& s, uint32_t channel_count)
     return invalid_argument("step: " + num(s.step_voxels) + " voxels; the step must be > 0");
   if (!(s.density >= 0.0) || !std::isfinite(s.density))
     return invalid_argument("density: " + num(s.density) + "; it must be >= 0");
+  if (!(s.opacity_unit_distance >= 0.0) || !std::isfinite(s.opacity_unit_distance))
+    return invalid_argument("opacity_unit_distance: " + num(s.opacity_unit_distance) +
+                            "; it must be > 0 world units, or 0 for per-voxel opacity");
   if (!(s.early_termination >= 0.0 && s.early_termination < 1.0))
     return invalid_argument("early_termination: " + num(s.early_termination) + "; it must be in [0, 1)");
   if (!(s.sample_offset >= 0.0 && s.sample_offset <= 1.0))

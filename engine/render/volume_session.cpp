@@ -44,12 +44,110 @@ Status apply_flags(const SessionFlags& f, RenderSettings& s) {
   return Status::ok();
 }
 
+// A source with another physical voxel size; chunks are forwarded untouched.
+class VoxelSizeSource final : public ChunkSource {
+ public:
+  VoxelSizeSource(std::shared_ptr<const ChunkSource> inner, const std::array<double, 3>& voxel_size)
+      : inner_(std::move(inner)), info_(inner_->info()) {
+    info_.voxel_size = voxel_size;
+  }
+  const VolumeInfo& info() const override { return info_; }
+  const std::vector<LevelInfo>& levels() const override { return inner_->levels(); }
+  uint32_t chunk_size() const override { return inner_->chunk_size(); }
+  uint32_t apron() const override { return inner_->apron(); }
+  Result<ChunkStats> stats(const ChunkKey& key) const override { return inner_->stats(key); }
+  Result<std::shared_ptr<const Chunk>> read(const ChunkKey& key) const override { return inner_->read(key); }
+
+ private:
+  std::shared_ptr<const ChunkSource> inner_;
+  VolumeInfo info_;
+};
+
+// "X" -> X when the whole text is one finite number.
+bool parse_number(const std::string& text, double* out) {
+  char* end = nullptr;
+  *out = std::strtod(text.c_str(), &end);
+  return !text.empty() && *end == '\0' && std::isfinite(*out);
+}
+
 std::string dims_text(const VolumeInfo& i) {
   return std::string(dtype_name(i.dtype)) + " " + std::to_string(i.dims[0]) + "x" + std::to_string(i.dims[1]) + "x" +
          std::to_string(i.dims[2]);
 }
 
 }  // namespace
+
+Result<std::optional<std::array<double, 3>>> parse_voxel_size_flag(const std::string& text) {
+  if (text.empty()) return std::optional<std::array<double, 3>>();
+  std::array<double, 3> v{};
+  std::stringstream ss(text);
+  std::string item;
+  int n = 0;
+  bool ok = true;
+  while (std::getline(ss, item, ',')) {
+    if (n < 3) ok = ok && parse_number(item, &v[n]) && v[n] > 0.0;
+    ++n;
+  }
+  if (!ok || n != 3 || text.back() == ',')
+    return invalid_argument("--voxel-size: '" + text + "' is not X,Y,Z with three finite numbers > 0 (world units per voxel)");
+  return std::optional<std::array<double, 3>>(v);
+}
+
+std::string voxel_size_text(const std::array<double, 3>& v) {
+  std::ostringstream ss;
+  ss.precision(17);
+  ss << v[0] << ',' << v[1] << ',' << v[2];
+  return ss.str();
+}
+
+Status apply_opacity_flags(const SessionFlags& f, RenderSettings& s) {
+  if (!f.opacity.empty()) {
+    // "LO:A,HI:B"
+    double v[4] = {0, 0, 0, 0};
+    const size_t comma = f.opacity.find(',');
+    const std::string parts[2] = {f.opacity.substr(0, comma), comma == std::string::npos ? "" : f.opacity.substr(comma + 1)};
+    bool ok = comma != std::string::npos;
+    for (int i = 0; i < 2 && ok; ++i) {
+      const size_t colon = parts[i].find(':');
+      ok = colon != std::string::npos && parse_number(parts[i].substr(0, colon), &v[2 * i]) &&
+           parse_number(parts[i].substr(colon + 1), &v[2 * i + 1]);
+    }
+    if (!ok)
+      return invalid_argument("--opacity: '" + f.opacity + "' is not LO:A,HI:B (e.g. 0.1:0,0.9:1)");
+    const double lo = v[0], a = v[1], hi = v[2], b = v[3];
+    if (!(lo >= 0.0 && hi <= 1.0 && lo < hi))
+      return invalid_argument("--opacity: '" + f.opacity + "': LO and HI are window fractions with 0 <= LO < HI <= 1");
+    if (!(a >= 0.0 && a <= 1.0 && b >= 0.0 && b <= 1.0))
+      return invalid_argument("--opacity: '" + f.opacity + "': the opacities A and B must be within 0..1");
+    std::vector<OpacityPoint> ramp;
+    if (lo > 0.0) ramp.push_back({0.0, 0.0}), ramp.push_back({lo, 0.0});
+    ramp.push_back({lo, a});
+    ramp.push_back({hi, b});
+    if (hi < 1.0) ramp.push_back({1.0, b});
+    for (ChannelSettings& ch : s.channels) ch.opacity_points = ramp;
+  }
+  if (!f.opacity_unit_distance.empty()) {
+    double d = 0.0;
+    if (!parse_number(f.opacity_unit_distance, &d) || d < 0.0)
+      return invalid_argument("--opacity-unit-distance: '" + f.opacity_unit_distance +
+                              "' must be a finite number > 0 (world units), or 0 for opacity per voxel");
+    s.opacity_unit_distance = d;
+  }
+  return Status::ok();
+}
+
+std::shared_ptr<const ChunkSource> with_voxel_size(std::shared_ptr<const ChunkSource> source,
+                                                   const std::array<double, 3>& voxel_size) {
+  return std::make_shared<VoxelSizeSource>(std::move(source), voxel_size);
+}
+
+Status apply_voxel_size_flag(const SessionFlags& f, uint32_t shrink, std::vector<DenseVolume>& channels) {
+  VXR_ASSIGN_OR_RETURN(const auto voxel_size, parse_voxel_size_flag(f.voxel_size));
+  if (!voxel_size) return Status::ok();
+  for (DenseVolume& v : channels)
+    for (int a = 0; a < 3; ++a) v.voxel_size[a] = (*voxel_size)[a] * (v.dims[a] > 1 ? double(shrink) : 1.0);
+  return Status::ok();
+}
 
 // Values at the 0.5 and 99.5 percentiles of a volume (sampled), in data units.
 std::pair<double, double> percentile_window(const DenseVolume& v) {
@@ -116,6 +214,12 @@ Result<VolumeSession> open_volume_session(const std::string& given, const Sessio
   if (!out.annotation_store.empty() && !std::filesystem::is_directory(out.annotation_store, ec))
     return not_found(out.annotation_store + ": no annotation store here (make one with `vxr annotate init`)");
   out.settings = default_view_settings();
+  // Flags first: a bad flag is reported before any file is read.
+  VXR_ASSIGN_OR_RETURN(const auto voxel_size, parse_voxel_size_flag(flags.voxel_size));
+  {
+    RenderSettings scratch;
+    VXR_RETURN_IF_ERROR(apply_opacity_flags(flags, scratch));
+  }
   bool window_known = false;
   if (input.empty()) {
     VXR_ASSIGN_OR_RETURN(DenseVolume v, assets::sample_volume());
@@ -145,6 +249,7 @@ Result<VolumeSession> open_volume_session(const std::string& given, const Sessio
     for (auto& t : loaded.later_timepoints) series.push_back(std::move(t));
     VXR_ASSIGN_OR_RETURN(out.source, DenseChunkSource::create_series(std::move(series)));
   }
+  if (voxel_size) out.source = with_voxel_size(out.source, *voxel_size);
   const VolumeInfo& info = out.source->info();
   out.description += " (" + dims_text(info) + ", " + std::to_string(out.source->levels().size()) + " levels)";
   if (!window_known && flags.window.empty()) {
@@ -153,6 +258,7 @@ Result<VolumeSession> open_volume_session(const std::string& given, const Sessio
     out.settings.channels[0].window_hi = w.second;
   }
   VXR_RETURN_IF_ERROR(apply_flags(flags, out.settings));
+  VXR_RETURN_IF_ERROR(apply_opacity_flags(flags, out.settings));
   VXR_RETURN_IF_ERROR(validate_render_settings(out.settings, 1));
   return out;
 }

@@ -12,7 +12,9 @@
 //   NAME.vxr/ (a project folder)       its volume, and its annotation store drawn
 #pragma once
 
+#include <array>
 #include <memory>
+#include <optional>
 #include <utility>
 #include <string>
 #include <vector>
@@ -30,6 +32,10 @@ struct SessionFlags {
   std::string window;     // "LO,HI" in data units; empty: from the data (percentiles) or the source's default
   std::string model;      // optical model name; empty: emission-absorption
   double step = 0.0;      // voxels per sample; 0: the default (0.5)
+  // Shared by vxr view and vxr render (parse_volume_flags, apply_opacity_flags):
+  std::string voxel_size;             // "X,Y,Z" world units per voxel, overriding the file's; empty: the file's
+  std::string opacity;                // "LO:A,HI:B" opacity ramp over the window (fractions 0..1); empty: none
+  std::string opacity_unit_distance;  // "D": opacity per D world units; "0": per voxel; empty: the settings'
   uint64_t max_dense_bytes = uint64_t(1) << 30;  // imported files: per channel, averaged down past it
   // An annotation store (engine/annotate) drawn with the volume; empty: a
   // project folder's own store (NAME.vxr/annotations), else none.
@@ -46,6 +52,28 @@ struct VolumeSession {
 
 // The RenderSettings a viewer starts from for 8-bit data of unknown content.
 RenderSettings default_view_settings();
+
+// --voxel-size: three finite numbers > 0, or nullopt when the flag is empty.
+Result<std::optional<std::array<double, 3>>> parse_voxel_size_flag(const std::string& text);
+
+// The --voxel-size text of `v`, exact (17 significant digits), e.g. for a card's voxel size.
+std::string voxel_size_text(const std::array<double, 3>& v);
+
+// --opacity LO:A,HI:B (LO < HI window fractions in 0..1, A and B opacities in
+// 0..1): every channel's opacity is 0 below LO, rises linearly from A at LO
+// to B at HI and stays B above. --opacity-unit-distance D (>= 0, finite).
+// Errors name the flag and what is wrong.
+Status apply_opacity_flags(const SessionFlags& f, RenderSettings& s);
+
+// `source` seen with level-0 voxel size `voxel_size` (world units per voxel):
+// every other property and every chunk unchanged.
+std::shared_ptr<const ChunkSource> with_voxel_size(std::shared_ptr<const ChunkSource> source,
+                                                   const std::array<double, 3>& voxel_size);
+
+// --voxel-size on volumes read whole: each channel's voxel size becomes the
+// flag's, times what averaging down by `shrink` made of it (axes longer
+// than one voxel). Nothing when the flag is empty.
+Status apply_voxel_size_flag(const SessionFlags& f, uint32_t shrink, std::vector<DenseVolume>& channels);
 
 Result<VolumeSession> open_volume_session(const std::string& input, const SessionFlags& flags);
 

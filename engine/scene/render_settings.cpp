@@ -40,6 +40,7 @@ json to_j(const RenderSettings& s) {
           {"blend", blend_name(s.blend)},
           {"step_voxels", s.step_voxels},
           {"density", s.density},
+          {"opacity_unit_distance", s.opacity_unit_distance},
           {"early_termination", s.early_termination},
           {"opacity_correction", s.opacity_correction},
           {"jitter", s.jitter},
@@ -117,6 +118,7 @@ void from_j(const json& j, RenderSettings& s) {
   }
   get(j, "step_voxels", s.step_voxels);
   get(j, "density", s.density);
+  get(j, "opacity_unit_distance", s.opacity_unit_distance);
   get(j, "early_termination", s.early_termination);
   get(j, "opacity_correction", s.opacity_correction);
   get(j, "jitter", s.jitter);
@@ -205,6 +207,7 @@ std::string scene_to_json(const Scene& s) {
   if (!s.annotations.empty()) j["annotations"] = s.annotations;
   if (s.has_camera)
     j["camera"] = {{"eye", s.camera.eye}, {"target", s.camera.target}, {"up", s.camera.up}, {"fov_y_deg", s.camera.fov_y_deg}};
+  if (s.voxel_size != std::array<double, 3>{0, 0, 0}) j["voxel_size"] = s.voxel_size;  // older readers ignore it
   return j.dump(2);
 }
 
@@ -244,6 +247,11 @@ Result<Scene> scene_from_json(const std::string& text) {
     get(j, "lod_bias", s.lod_bias);
     if (!(std::isfinite(s.lod_bias) && std::abs(s.lod_bias) <= 16.0))
       throw KeyError{"lod_bias must be within -16..16"};
+    get(j, "voxel_size", s.voxel_size);
+    if (s.voxel_size != std::array<double, 3>{0, 0, 0})
+      for (double v : s.voxel_size)
+        if (!(v > 0.0 && std::isfinite(v)))
+          throw KeyError{"voxel_size must be three positive finite numbers (world units per voxel), or absent"};
     if (j.contains("camera")) {
       const json& c = j.at("camera");
       s.has_camera = true;

@@ -66,7 +66,13 @@ struct RenderSettings {
   std::vector<ChannelSettings> channels{ChannelSettings{}};  // one per volume channel (up to 4)
   ChannelBlend blend = ChannelBlend::kAdditive;
   double step_voxels = 0.5;            // distance between samples, in voxels
-  double density = 0.25;               // extinction per voxel at opacity 1
+  double density = 0.25;               // extinction per length unit at opacity 1 (see below)
+  // The length unit of `density`. 0 (default, older files): one voxel along
+  // the ray, whatever the voxel's physical size. D > 0: D world units (the
+  // volume's physical voxel size), like VTK's scalar opacity unit distance, so
+  // a voxel twice as thick in z absorbs twice as much along z and
+  // anisotropic data renders like the same data resampled isotropically.
+  double opacity_unit_distance = 0.0;
   double early_termination = 1.0 / 512.0;  // stop a ray once its transmittance is <= this
   // Exact opacity from extinction, 1 - exp(-tau * step) (true), or the naive
   // linear correction a = tau * step clamped to 1 (false). The naive form exists
@@ -122,6 +128,8 @@ struct Scene {
   double lod_bias = 0.0;  // lod renderer: log2 voxels per pixel accepted
   std::string annotations;  // annotation store drawn with the volume (absolute path); "": none or the project's
   RenderSettings render;
+  // World units per voxel replacing the input's own (--voxel-size); all 0: the input's.
+  std::array<double, 3> voxel_size{0, 0, 0};
   bool operator==(const Scene&) const = default;
 };
 

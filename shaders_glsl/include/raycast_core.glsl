@@ -128,11 +128,23 @@ struct VxrRay {
   float prev_t;
   float hit_t;                 // isosurface: ray parameter of the first crossing (< 0: none)
   float trans;                 // one channel, additive EA: exp(-tau.x), kept from the last termination test
+  float density;               // extinction at TF opacity 1 per unit of t (vxr_ray_density)
   bool done;                   // early termination or surface found
 };
 
-VxrRay vxr_begin(RaycastParams P) {
+// Extinction at TF opacity 1 per unit of t along the unit voxel-space
+// direction `dir`: the density per voxel, or in world-unit opacity the
+// density times the world length of one voxel of t along this ray.
+// The CPU's ray_density (engine/render/raycast_setup.h) is the same rule.
+float vxr_ray_density(RaycastParams P, vec3 dir) {
+  if (P.world_opacity.xyz == vec3(0.0)) return P.march.y;
+  return P.march.y * length(dir * P.world_opacity.xyz);
+}
+
+// `dir`: the ray's unit direction in (level-0) voxel space.
+VxrRay vxr_begin(RaycastParams P, vec3 dir) {
   VxrRay r;
+  r.density = vxr_ray_density(P, dir);
   for (int c = 0; c < VXR_MAX_CHANNELS; ++c) r.acc[c] = vec4(0.0);
   r.tau = vec4(0.0);
   // A statement, not a ?: on spec constants: glslang folds that into an
@@ -194,7 +206,7 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
     gfac = clamp((mag - P.gradient.y) / (P.gradient.z - P.gradient.y), 0.0, 1.0);
   }
   float dc = depth_color ? vxr_depth_coord(P, VXR_DEPTH_POS(pos, t)) : 0.0;
-  float density = P.march.y;
+  float density = r.density;
   vec3 mix_color = vec3(0.0);
   float mix_tau = 0.0;
   for (int c = 0; c < n; ++c) {
@@ -325,7 +337,7 @@ vec4 vxr_cast(RaycastParams P, uvec2 pix, float depth_limit_view) {
   if (P.shading.y != 0.0) t1 = min(t1, depth_limit_view * length(raw_dir));
   if (!(t1 > t0)) return vec4(0.0);
   float jitter = P.march.w < 0.0 ? vxr_jitter(pix) : P.march.w;
-  VxrRay r = vxr_begin(P);
+  VxrRay r = vxr_begin(P, dir);
   vxr_march(r, P, eye, dir, t0, t0, t1, jitter);
   return vxr_finish(r, P, eye, dir);
 }

@@ -50,10 +50,11 @@ struct RaycastParams {
   uvec4 control;  // x: model, y: image width, z: image height, w: max steps per ray
   uvec4 control2; // x: channel blend, y: index of the iso channel, z: naive linear opacity (1) or exact (0), w: unused
   vec4 window[VXR_MAX_CHANNELS];  // per channel: x lo, y hi (texel units), z gamma, w enabled (0/1)
+  vec4 world_opacity;  // xyz: voxel size / opacity unit distance (world-unit opacity), all 0: per voxel; w: unused
 };
 
 #ifdef __cplusplus
-static_assert(sizeof(RaycastParams) == 256, "std140 layout of RaycastParams changed: update both languages");
+static_assert(sizeof(RaycastParams) == 272, "std140 layout of RaycastParams changed: update both languages");
 }  // namespace vxr::shader
 #endif
 

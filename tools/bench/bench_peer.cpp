@@ -10,6 +10,9 @@
 // the same run; whether the two images are byte-identical; RMSE (8-bit units,
 // RGBA over black) against the CPU reference of the same scene. Per scene the
 // report names the coarsest step whose RMSE <= 1.5 and the on/off speedup there.
+// Opacity is per world unit (unit distance 1, VTK's default scalar opacity
+// unit distance), so the MRI's 5x thicker z voxels absorb 5x along z as in
+// VTK; --opacity-unit-distance 0 gives vxr's per-voxel opacity instead.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -39,6 +42,7 @@ struct Options {
   std::vector<double> steps{2.0, 1.0, 0.5, 0.25};
   double reference_step = 0.125;
   double rmse_goal = 1.5;  // 8-bit units
+  double opacity_unit_distance = 1.0;  // world units; 0: per voxel
 };
 
 struct Scene {
@@ -90,8 +94,9 @@ double rmse(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
 }
 
 // The VTK-style transfer function: a linear opacity ramp over the window, grey.
-RenderSettings ramp(OpticalModel model, double lo, double hi) {
+RenderSettings ramp(OpticalModel model, double lo, double hi, double unit_distance) {
   RenderSettings s;
+  s.opacity_unit_distance = unit_distance;
   s.model = model;
   s.channels[0].window_lo = lo;
   s.channels[0].window_hi = hi;
@@ -100,7 +105,7 @@ RenderSettings ramp(OpticalModel model, double lo, double hi) {
   return s;
 }
 
-Result<std::vector<Scene>> scenes() {
+Result<std::vector<Scene>> scenes(double unit_distance) {
   std::vector<Scene> out;
   VXR_ASSIGN_OR_RETURN(DenseVolume mri, assets::sample_volume());
   // The ramp starts where tissue starts: 75 is the threshold of the testdata's
@@ -108,8 +113,8 @@ Result<std::vector<Scene>> scenes() {
   // below it is background noise, transparent as in a VTK ramp.
   const double lo = 75.0, hi = std::max(percentile_window(mri).second, lo + 1.0);
   VXR_ASSIGN_OR_RETURN(auto mri_src, DenseChunkSource::create({mri}));
-  out.push_back({"mri ea", mri_src, mri, ramp(OpticalModel::kEmissionAbsorption, lo, hi)});
-  out.push_back({"mri mip", mri_src, mri, ramp(OpticalModel::kMip, lo, hi)});
+  out.push_back({"mri ea", mri_src, mri, ramp(OpticalModel::kEmissionAbsorption, lo, hi, unit_distance)});
+  out.push_back({"mri mip", mri_src, mri, ramp(OpticalModel::kMip, lo, hi, unit_distance)});
   ProceduralOptions po;
   po.dims = {256, 256, 256};
   po.noise_max = 6;
@@ -117,7 +122,7 @@ Result<std::vector<Scene>> scenes() {
   VXR_ASSIGN_OR_RETURN(auto vessels, ProceduralSource::create(po));
   std::shared_ptr<ChunkSource> vsrc = std::move(vessels);
   VXR_ASSIGN_OR_RETURN(DenseVolume v0, read_level_dense(*vsrc, 0, 0, 0, uint64_t(1) << 30));
-  RenderSettings vs = ramp(OpticalModel::kEmissionAbsorption, 8, 200);  // above the noise (0..6)
+  RenderSettings vs = ramp(OpticalModel::kEmissionAbsorption, 8, 200, unit_distance);  // above the noise (0..6)
   vs.density = 0.3;
   out.push_back({"vessels 256^3 ea", vsrc, std::move(v0), vs});
   return out;
@@ -126,13 +131,14 @@ Result<std::vector<Scene>> scenes() {
 int run(const Options& o) {
   auto gpu = open_gpu();
   if (!gpu) return fail(gpu.status());
-  auto made = scenes();
+  auto made = scenes(o.opacity_unit_distance);
   if (!made) return fail(made.status());
   nlohmann::json doc, per_scene = nlohmann::json::array();
   doc["image_size"] = {o.size, o.size};
   doc["repeats"] = o.common.repeats;
   doc["reference_step_voxels"] = o.reference_step;
   doc["rmse_goal"] = o.rmse_goal;
+  doc["opacity_unit_distance"] = o.opacity_unit_distance;
   Progress progress("bench peer", made->size() * (o.steps.size() * 2 + 1), false);
   std::printf("%-18s %6s %10s %10s %8s %10s %10s %9s %9s %s\n", "scene", "step", "on ms", "off ms", "off/on",
               "on gpu ms", "off gpu ms", "samples x", "rmse", "identical");
@@ -188,7 +194,11 @@ int run(const Options& o) {
     nlohmann::json at_goal = nullptr;
     if (front_step > 0.0)
       at_goal = {{"step_voxels", front_step}, {"on_wall_ms", front_on_ms}, {"speedup_wall", front_speedup}};
-    per_scene.push_back({{"scene", sc.name}, {"steps", rows}, {"coarsest_step_within_goal", at_goal}});
+    const auto& vs = sc.level0.voxel_size;
+    per_scene.push_back({{"scene", sc.name},
+                         {"voxel_size", {vs[0], vs[1], vs[2]}},
+                         {"steps", rows},
+                         {"coarsest_step_within_goal", at_goal}});
     if (front_step > 0.0)
       std::printf("%-18s coarsest step with rmse <= %.2f: %.3f voxels, %.2f ms, skipping %.2fx\n", sc.name.c_str(),
                   o.rmse_goal, front_step, front_on_ms, front_speedup);
@@ -218,6 +228,9 @@ void add_peer_bench(CLI::App& bench, cli::Invocation& inv) {
   cmd->add_option("--reference-step", o->reference_step, "the CPU reference's step in voxels (default 1/8)")
       ->check(CLI::Range(1.0 / 64, 1.0));
   cmd->add_option("--rmse-goal", o->rmse_goal, "RMSE (8-bit units) a step must reach (default 1.5)");
+  cmd->add_option("--opacity-unit-distance", o->opacity_unit_distance,
+                  "opacity per this many world units, as VTK (default 1); 0: per voxel")
+      ->check(CLI::NonNegativeNumber);
   add_common_options(cmd, o->common);
   cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
 }
