@@ -11,12 +11,17 @@
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/status.h"
 #include "gpu/context.h"
 #include "xr/pose.h"
+
+namespace vxr {
+struct RenderSettings;  // scene/render_settings.h (not included: its VolumeTransform is not xr's)
+}
 
 namespace vxr::xr {
 
@@ -47,6 +52,17 @@ struct FrameState {
   int64_t display_time_ns = 0;  // predicted display time (OpenXR) or a steady clock
   std::vector<ViewSpec> views;  // filled when should_render
   InputState input;
+  // A target with its own controls (the desktop viewer's panels) says what to
+  // draw this frame; empty: the session's settings and timepoint 0.
+  std::shared_ptr<const RenderSettings> settings;
+  uint32_t timepoint = 0;
+};
+
+// Semaphores the frame's one submission waits on and signals, for targets
+// that record into their own images after the views (a window's swapchain).
+struct FrameSubmit {
+  std::vector<VkSemaphore> wait;
+  std::vector<VkSemaphore> signal;
 };
 
 // What the frame showed, for targets that hand depth to a compositor.
@@ -74,6 +90,13 @@ class FrameTarget {
   virtual Result<FrameState> wait_frame() = 0;
   // The image to render view `view` of the current frame into.
   virtual Result<TargetImage> acquire(size_t view) = 0;
+  // Records what the target draws after every view into the frame's one
+  // command buffer (the desktop window: eyes blitted into the swapchain
+  // image, then its panels) and adds the semaphores that submission needs.
+  virtual Status record_after_views(VkCommandBuffer cmd, FrameSubmit& submit) {
+    (void)cmd, (void)submit;
+    return Status::ok();
+  }
   // Releases the images and submits or presents the frame.
   virtual Status end_frame(const FrameState& frame, const FrameContent& content) = 0;
 

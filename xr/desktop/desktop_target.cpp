@@ -11,13 +11,22 @@
 #undef None
 #undef Bool
 
+#include <imgui.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <glm/gtc/quaternion.hpp>
+#include <map>
 
 #include "core/image.h"
+#include "core/log.h"
 #include "gpu/vk_check.h"
+#include "xr/desktop/imgui_layer.h"
 #include "xr/desktop/viewer_keys.h"
+#include "xr/desktop/viewer_panels.h"
+#include "xr/desktop/viewer_setup.h"
 #include "xr/eye_renderer.h"
 #include "xr/volume_transform.h"
 
@@ -62,16 +71,51 @@ Result<std::unique_ptr<DesktopTarget>> DesktopTarget::create(const DesktopOption
                                       " window: " + g_glfw_error);
   glfwSetWindowUserPointer(t->window_, t.get());
   glfwSetCursorPosCallback(t->window_, [](GLFWwindow* win, double x, double y) {
-    if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) self(win)->on_drag(x - g_last_x, y - g_last_y);
+    DesktopTarget* target = self(win);
+    if (target->state_)
+      target->on_viewer_cursor(x - g_last_x, y - g_last_y);
+    else if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS)
+      target->on_drag(x - g_last_x, y - g_last_y);
     g_last_x = x;
     g_last_y = y;
   });
   glfwSetScrollCallback(t->window_, [](GLFWwindow* win, double, double dy) { self(win)->on_scroll(dy); });
-  // Esc through the key callback: polling glfwGetKey once a frame misses a tap shorter than a frame.
+  // Keys through the callback: polling glfwGetKey once a frame misses a tap shorter than a frame.
   glfwSetKeyCallback(t->window_, [](GLFWwindow* win, int key, int, int action, int) {
-    if (viewer_key_from_glfw(key, action) == ViewerKey::kQuit) glfwSetWindowShouldClose(win, GLFW_TRUE);
+    const std::optional<ViewerKey> k = viewer_key_from_glfw(key, action);
+    if (k == ViewerKey::kQuit) glfwSetWindowShouldClose(win, GLFW_TRUE);
+    DesktopTarget* target = self(win);
+    if (k && target->state_ && !ImGuiLayer::wants_keyboard()) target->state_->handle_key(*k);
   });
+  if (t->state_) glfwSetWindowTitle(t->window_, viewer_window_title(o.viewer->dataset, 0.0).c_str());
   return t;
+}
+
+DesktopTarget::DesktopTarget(const DesktopOptions& o) : o_(o) {
+  if (o_.viewer) {
+    state_ = std::make_unique<ViewerState>(o_.viewer->scene, o_.viewer->timepoints, o_.viewer->data_range);
+    if (o_.viewer->script) {
+      const VolumePlacement placement = o_.viewer->placement;
+      const uint32_t w = o_.width, h = o_.height;
+      script_ = std::make_unique<UiScriptRunner>(*o_.viewer->script, o_.viewer->store.get(),
+                                                 [placement, w, h](const ViewerState& state) {
+                                                   Scene scene = state.scene();
+                                                   scene.camera = viewer_world_camera(state, placement);
+                                                   scene.has_camera = true;
+                                                   scene.viewport = {w, h};
+                                                   return scene;
+                                                 });
+    }
+  }
+}
+
+void DesktopTarget::on_viewer_cursor(double dx, double dy) {
+  if (ImGuiLayer::wants_mouse()) return;
+  if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS)
+    state_->orbit_drag(dx, dy);
+  else if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
+           glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS)
+    state_->pan_drag(dx, dy, double(o_.height));
 }
 
 DesktopTarget::~DesktopTarget() {
@@ -101,7 +145,13 @@ void DesktopTarget::on_drag(double dx, double dy) {
   pitch_ = std::clamp(pitch_ - dy * 0.01, -1.5, 1.5);
 }
 
-void DesktopTarget::on_scroll(double dy) { distance_ = std::clamp(distance_ * std::pow(0.9, dy), 0.02, 50.0); }
+void DesktopTarget::on_scroll(double dy) {
+  if (state_) {
+    if (!ImGuiLayer::wants_mouse()) state_->zoom(dy);
+    return;
+  }
+  distance_ = std::clamp(distance_ * std::pow(0.9, dy), 0.02, 50.0);
+}
 
 Pose DesktopTarget::head_pose() const {
   const glm::dquat q = glm::angleAxis(yaw_, glm::dvec3(0, 1, 0)) * glm::angleAxis(pitch_, glm::dvec3(1, 0, 0));
@@ -149,6 +199,10 @@ Status DesktopTarget::attach(gpu::Context& ctx) {
     }));
     eyes_.push_back(std::move(img));
   }
+  if (state_) {
+    VXR_ASSIGN_OR_RETURN(ui_, ImGuiLayer::create(window_, ctx, swap_format_, swap_images_, swap_extent_));
+    last_frame_start_ = std::chrono::steady_clock::now();
+  }
   return Status::ok();
 }
 
@@ -184,7 +238,9 @@ Status DesktopTarget::create_swapchain() {
   ci.imageColorSpace = space;
   ci.imageExtent = swap_extent_;
   ci.imageArrayLayers = 1;
-  ci.imageUsage = VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+  // TRANSFER_SRC where offered: the viewer's screenshots copy the swapchain image.
+  ci.imageUsage = VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
+                  (caps.supportedUsageFlags & VK_IMAGE_USAGE_TRANSFER_SRC_BIT);
   ci.imageSharingMode = VK_SHARING_MODE_EXCLUSIVE;
   ci.preTransform = caps.currentTransform;
   ci.compositeAlpha = VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR;
@@ -213,8 +269,17 @@ void DesktopTarget::destroy_swapchain() {
   swap_images_.clear();
 }
 
+Status DesktopTarget::recreate_swapchain() {
+  destroy_swapchain();
+  VXR_RETURN_IF_ERROR(create_swapchain());
+  if (ui_) VXR_RETURN_IF_ERROR(ui_->set_images(swap_images_, swap_extent_));
+  return Status::ok();
+}
+
 void DesktopTarget::detach() {
   if (!ctx_) return;
+  ui_.reset();  // its framebuffers and pipeline go before the device
+  screenshot_buffer_ = {};
   destroy_swapchain();
   eyes_.clear();
   acquired_.reset();
@@ -235,6 +300,10 @@ Result<FrameState> DesktopTarget::wait_frame() {
     return f;
   }
   if (glfwGetKey(window_, GLFW_KEY_ESCAPE) == GLFW_PRESS) glfwSetWindowShouldClose(window_, GLFW_TRUE);
+  if (state_) {
+    VXR_RETURN_IF_ERROR(viewer_frame(f));
+    return f;
+  }
   // Fly: W/S along the view, A/D sideways, Q/E down/up (moves the orbit centre).
   const Pose head = head_pose();
   const double step = 0.01 * distance_;
@@ -270,6 +339,22 @@ Result<TargetImage> DesktopTarget::acquire(size_t view) {
 
 Status DesktopTarget::end_frame(const FrameState& frame, const FrameContent& content) {
   ++frame_;
+  if (state_) {
+    if (!image_acquired_) return Status::ok();
+    image_acquired_ = false;
+    if (!screenshot_pending_.empty()) VXR_RETURN_IF_ERROR(write_screenshot());
+    VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
+    VkSemaphore done = render_done_[image_index_];
+    pi.waitSemaphoreCount = 1;
+    pi.pWaitSemaphores = &done;
+    pi.swapchainCount = 1;
+    pi.pSwapchains = &swapchain_;
+    pi.pImageIndices = &image_index_;
+    const VkResult r = vkQueuePresentKHR(ctx_->queue(), &pi);
+    if (r == VK_ERROR_OUT_OF_DATE_KHR || r == VK_SUBOPTIMAL_KHR) return recreate_swapchain();
+    if (r != VK_SUCCESS) return gpu_error("vkQueuePresentKHR failed: " + std::string(gpu::vk_result_name(r)));
+    return Status::ok();
+  }
   if (!have_focus_) {
     focus_ = content.focus_point;
     have_focus_ = true;
@@ -387,6 +472,231 @@ Status DesktopTarget::screenshot() {
     }
   XDestroyImage(xi);
   return write_png(o_.screenshot_path, img);
+}
+
+// ---- the viewer ----------------------------------------------------------
+
+CameraState viewer_world_camera(const ViewerState& state, const VolumePlacement& placement) {
+  const glm::dvec3 e = placement.extent();
+  const double longest = std::max({e.x, e.y, e.z});
+  CameraState c = state.camera();
+  for (int i = 0; i < 3; ++i) {
+    c.eye[i] *= longest;
+    c.target[i] *= longest;
+  }
+  return c;
+}
+
+namespace {
+
+glm::dvec3 vec(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
+
+// The reference-space pose whose view, through `t`, is `c` (a camera in the volume's frame).
+Pose pose_for_camera(const CameraState& c, const VolumeTransform& t) {
+  const glm::dvec3 eye = vec(c.eye), forward = glm::normalize(vec(c.target) - eye);
+  const glm::dvec3 right = glm::normalize(glm::cross(forward, vec(c.up)));
+  const glm::dvec3 up = glm::cross(right, forward);
+  const glm::dquat in_volume = glm::quat_cast(glm::dmat3(right, up, -forward));
+  return {glm::normalize(t.orientation * in_volume), t.to_reference(eye)};
+}
+
+}  // namespace
+
+Status DesktopTarget::viewer_frame(FrameState& f) {
+  const ViewerSetup& setup = *o_.viewer;
+  const auto now = std::chrono::steady_clock::now();
+  frame_ms_ = std::chrono::duration<double, std::milli>(now - last_frame_start_).count();
+  last_frame_start_ = now;
+  screenshot_pending_.clear();
+  if (script_) {
+    VXR_ASSIGN_OR_RETURN(UiScriptRunner::FrameWork work, script_->before_frame(*state_));
+    if (work.done) {
+      f.exit = true;
+      return Status::ok();
+    }
+    screenshot_pending_ = work.screenshot;
+  }
+  if (state_->quit_requested()) glfwSetWindowShouldClose(window_, GLFW_TRUE);
+  glfwSetWindowTitle(window_, viewer_window_title(setup.dataset, frame_ms_).c_str());
+
+  const double ty = std::tan(state_->orbit().fov_y_deg * 3.14159265358979323846 / 360.0);
+  const double tx = ty * double(o_.width) / double(o_.height);
+  const Fov fov{-std::atan(tx), std::atan(tx), std::atan(ty), -std::atan(ty)};
+
+  ui_->begin();
+  PanelInputs in;
+  in.dataset = setup.dataset;
+  in.frame_ms = frame_ms_;
+  draw_viewer_panels(*state_, in);
+  // The camera after this frame's edits (panels, keys, script), so a change shows in the frame that made it.
+  const Pose head = pose_for_camera(viewer_world_camera(*state_, setup.placement), setup.transform);
+  const ViewSpec mono{head, fov, o_.width, o_.height};
+  if (!o_.stereo) draw_annotation_overlay(mono);
+  ui_->end();
+
+  if (state_->revision() != drawn_revision_ || !drawn_settings_) {
+    drawn_settings_ = std::make_shared<const RenderSettings>(state_->render());
+    drawn_revision_ = state_->revision();
+  }
+  f.settings = drawn_settings_;
+  f.timepoint = state_->scene().timepoint;
+  f.should_render = true;
+  f.display_time_ns = int64_t(frame_) * 16666667;
+  f.views = o_.stereo ? stereo_views(head, o_.ipd_m, fov, o_.width, o_.height) : std::vector<ViewSpec>{mono};
+  return Status::ok();
+}
+
+void DesktopTarget::draw_annotation_overlay(const ViewSpec& view) {
+  annotate::AnnotationStore* store = o_.viewer->store.get();
+  if (!store) return;
+  const uint64_t revision = script_ ? script_->annotation_revision() : 0;
+  if (revision != overlay_revision_) {
+    overlay_revision_ = revision;
+    overlay_points_.clear();
+    overlay_lines_.clear();
+    overlay_summary_.clear();
+    auto markers = store->markers();
+    auto measurements = store->measurements();
+    if (!markers || !measurements) {
+      log_warn("viewer: " + store->path() + ": " + (!markers ? markers.status() : measurements.status()).message());
+    } else {
+      std::map<std::string, size_t> counts;
+      for (const annotate::Marker& m : *markers) {
+        overlay_points_.push_back({m.pos, m.color});
+        ++counts[m.cls];
+      }
+      for (const auto& [cls, n] : counts) overlay_summary_ += cls + ": " + std::to_string(n) + " marker(s)\n";
+      char line[96];
+      for (const annotate::Measurement& m : *measurements) {
+        overlay_lines_.push_back({OverlayPoint{m.a, {1, 1, 1, 1}}, OverlayPoint{m.b, {1, 1, 1, 1}}});
+        std::snprintf(line, sizeof line, "measurement %llu: %.3f %s\n", static_cast<unsigned long long>(m.id),
+                      store->length(m), store->voxel_space().unit.c_str());
+        overlay_summary_ += line;
+      }
+    }
+  }
+  const VolumePlacement& placement = o_.viewer->placement;
+  const Camera cam = camera_for_view(view, o_.viewer->transform);
+  const glm::dvec3 forward = glm::normalize(cam.target - cam.eye);
+  const glm::dvec3 right = glm::normalize(glm::cross(forward, cam.up));
+  const glm::dvec3 up = glm::cross(right, forward);
+  const double tx = std::tan(view.fov.right), ty = std::tan(view.fov.up);
+  // Voxel coordinates -> window pixels (the renderer's convention: voxel v at (v - dims/2) * size).
+  auto project = [&](const std::array<double, 3>& v, ImVec2* out) {
+    glm::dvec3 w;
+    for (int i = 0; i < 3; ++i) w[i] = (v[i] - 0.5 * placement.dims[i]) * placement.voxel_size[i];
+    const glm::dvec3 d = w - cam.eye;
+    const double z = glm::dot(d, forward);
+    if (z <= 1e-9) return false;
+    const double nx = glm::dot(d, right) / (z * tx), ny = glm::dot(d, up) / (z * ty);
+    *out = ImVec2(float(0.5 * (nx + 1.0) * view.width), float(0.5 * (1.0 - ny) * view.height));
+    return true;
+  };
+  auto colour = [](const std::array<double, 4>& c) {
+    return ImGui::GetColorU32(ImVec4(float(c[0]), float(c[1]), float(c[2]), float(c[3])));
+  };
+  ImDrawList* draw = ImGui::GetBackgroundDrawList();
+  const float radius = std::max(4.0f, float(view.height) / 100.0f);
+  for (const auto& [a, b] : overlay_lines_) {
+    ImVec2 pa, pb;
+    if (project(a.voxel, &pa) && project(b.voxel, &pb)) {
+      draw->AddLine(pa, pb, colour(a.color), 2.0f);
+      draw->AddCircle(pa, radius * 0.6f, colour(a.color), 0, 2.0f);
+      draw->AddCircle(pb, radius * 0.6f, colour(b.color), 0, 2.0f);
+    }
+  }
+  for (const OverlayPoint& p : overlay_points_) {
+    ImVec2 at;
+    if (!project(p.voxel, &at)) continue;
+    draw->AddCircleFilled(at, radius, colour(p.color));
+    draw->AddCircle(at, radius, IM_COL32(0, 0, 0, 255), 0, 1.5f);
+  }
+  if (state_->ui_visible() && !overlay_summary_.empty()) {
+    ImGui::SetNextWindowPos(ImVec2(float(view.width) - 250.0f, 10.0f), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(240.0f, 0.0f), ImGuiCond_FirstUseEver);
+    if (ImGui::Begin("Annotations")) ImGui::TextUnformatted(overlay_summary_.c_str());
+    ImGui::End();
+  }
+}
+
+Status DesktopTarget::record_after_views(VkCommandBuffer cmd, FrameSubmit& submit) {
+  if (!state_) return Status::ok();  // the bare window presents in end_frame
+  uint32_t index = 0;
+  VkResult r = vkAcquireNextImageKHR(ctx_->device(), swapchain_, UINT64_MAX, acquired_, VK_NULL_HANDLE, &index);
+  if (r == VK_ERROR_OUT_OF_DATE_KHR) {
+    VXR_RETURN_IF_ERROR(recreate_swapchain());
+    r = vkAcquireNextImageKHR(ctx_->device(), swapchain_, UINT64_MAX, acquired_, VK_NULL_HANDLE, &index);
+  }
+  if (r != VK_SUCCESS && r != VK_SUBOPTIMAL_KHR)
+    return gpu_error("vkAcquireNextImageKHR failed: " + std::string(gpu::vk_result_name(r)));
+  const VkImage target = swap_images_[index];
+  image_barrier(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+  const int32_t slot_w = int32_t(swap_extent_.width / eyes_.size());
+  for (size_t v = 0; v < eyes_.size(); ++v) {
+    const gpu::Image& e = eyes_[v];
+    VkImageBlit blit{};
+    blit.srcSubresource = blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    blit.srcOffsets[1] = {int32_t(e.extent.width), int32_t(e.extent.height), 1};
+    blit.dstOffsets[0] = {int32_t(v) * slot_w, 0, 0};
+    blit.dstOffsets[1] = {int32_t(v + 1) * slot_w, int32_t(swap_extent_.height), 1};
+    vkCmdBlitImage(cmd, e.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                   &blit, VK_FILTER_LINEAR);
+  }
+  ui_->record(cmd, index);  // TRANSFER_DST -> panels drawn -> PRESENT_SRC
+  if (!screenshot_pending_.empty()) {
+    const VkDeviceSize bytes = VkDeviceSize(swap_extent_.width) * swap_extent_.height * 4;
+    if (!screenshot_buffer_.buffer || screenshot_buffer_.size < bytes) {
+      VXR_ASSIGN_OR_RETURN(screenshot_buffer_,
+                           gpu::create_buffer(*ctx_, {bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                                      gpu::MemoryIntent::kReadback, "desktop screenshot"}));
+    }
+    image_barrier(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
+                  VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = {swap_extent_.width, swap_extent_.height, 1};
+    vkCmdCopyImageToBuffer(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, screenshot_buffer_.buffer, 1, &region);
+    VkMemoryBarrier to_host{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0, nullptr,
+                         0, nullptr);
+    image_barrier(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                  VK_IMAGE_LAYOUT_PRESENT_SRC_KHR);
+  }
+  submit.wait.push_back(acquired_);
+  submit.signal.push_back(render_done_[index]);
+  image_acquired_ = true;
+  image_index_ = index;
+  return Status::ok();
+}
+
+// The swapchain image the frame copied (B8G8R8A8 or R8G8B8A8, sRGB-encoded
+// bytes where the window is sRGB: what the window shows) as a PNG.
+Status DesktopTarget::write_screenshot() {
+  const std::string path = screenshot_pending_;
+  screenshot_pending_.clear();
+  if (!screenshot_buffer_.host_coherent) {
+    VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
+    range.memory = screenshot_buffer_.memory;
+    range.size = VK_WHOLE_SIZE;
+    VXR_VK_TRY(vkInvalidateMappedMemoryRanges(ctx_->device(), 1, &range));
+  }
+  const bool bgra = swap_format_ == VK_FORMAT_B8G8R8A8_SRGB || swap_format_ == VK_FORMAT_B8G8R8A8_UNORM;
+  ImageRgba8 img(swap_extent_.width, swap_extent_.height);
+  const auto* src = static_cast<const uint8_t*>(screenshot_buffer_.mapped);
+  for (size_t i = 0; i < size_t(img.width) * img.height; ++i) {
+    const uint8_t* p = src + 4 * i;
+    uint8_t* o = &img.pixels[4 * i];
+    o[0] = bgra ? p[2] : p[0];
+    o[1] = p[1];
+    o[2] = bgra ? p[0] : p[2];
+    o[3] = 255;  // the window is opaque
+  }
+  VXR_RETURN_IF_ERROR(write_png(path, img));
+  if (script_) script_->screenshot_written(path);
+  log_info("viewer: screenshot " + path);
+  return Status::ok();
 }
 
 }  // namespace vxr::xr

@@ -5,10 +5,21 @@
 // --stereo shows both eyes side by side (the paper's on-monitor side-by-side
 // picture). The eye images are ordinary device images; end_frame blits them
 // into the window's swapchain image and presents.
+//
+// With a ViewerSetup the window is the viewer: Dear ImGui panels over a
+// ViewerState (xr/desktop/viewer_state.h) that says what the renderer draws
+// each frame, the orbit camera from the mouse, keys through the key callback,
+// the title "vxr - DATASET - N ms", markers and measurements of the store drawn
+// over the volume, and an optional UI script. The eyes are then blitted and
+// the panels drawn into the swapchain image in the frame's own command buffer
+// (record_after_views), and only a screenshot reads anything back.
 #pragma once
 
+#include <array>
+#include <chrono>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "gpu/resources.h"
 #include "xr/frame_target.h"
@@ -16,6 +27,17 @@
 struct GLFWwindow;
 
 namespace vxr::xr {
+
+struct ViewerSetup;  // xr/desktop/viewer_setup.h
+class ViewerState;
+class ImGuiLayer;
+class UiScriptRunner;
+
+// A marker or measurement end in voxels, with its colour (the overlay draws it).
+struct OverlayPoint {
+  std::array<double, 3> voxel;
+  std::array<double, 4> color;
+};
 
 struct DesktopOptions {
   uint32_t width = 256, height = 256;  // per eye
@@ -29,6 +51,7 @@ struct DesktopOptions {
   // an sRGB headset swapchain, and a mirror's blit copies the encoded bytes
   // unchanged (decode + encode).
   bool srgb_swapchain = true;
+  std::shared_ptr<const ViewerSetup> viewer;  // null: the bare window (no panels)
 };
 
 // Why there is no usable window system (no DISPLAY, GLFW or Vulkan surface
@@ -45,6 +68,7 @@ class DesktopTarget : public FrameTarget {
   Status attach(gpu::Context& ctx) override;
   Result<FrameState> wait_frame() override;
   Result<TargetImage> acquire(size_t view) override;
+  Status record_after_views(VkCommandBuffer cmd, FrameSubmit& submit) override;
   Status end_frame(const FrameState& frame, const FrameContent& content) override;
   void request_exit() override { exit_requested_ = true; }
   void detach() override;
@@ -62,10 +86,16 @@ class DesktopTarget : public FrameTarget {
   Status screenshot();
 
  private:
-  explicit DesktopTarget(const DesktopOptions& o) : o_(o) {}
+  explicit DesktopTarget(const DesktopOptions& o);
   Status create_swapchain();
   void destroy_swapchain();
+  Status recreate_swapchain();
   Pose head_pose() const;
+  // The viewer's frame: script steps, panels, overlay, settings and views.
+  Status viewer_frame(FrameState& f);
+  void draw_annotation_overlay(const ViewSpec& view);
+  Status write_screenshot();
+  void on_viewer_cursor(double dx, double dy);
 
   DesktopOptions o_;
   GLFWwindow* window_ = nullptr;
@@ -86,6 +116,26 @@ class DesktopTarget : public FrameTarget {
   glm::dvec3 focus_{0.0, 1.6, -0.5};
   double yaw_ = 0.0, pitch_ = 0.0, distance_ = 0.5;
   bool have_focus_ = false;
+
+  // The viewer (o_.viewer set).
+  std::unique_ptr<ViewerState> state_;
+  std::unique_ptr<ImGuiLayer> ui_;
+  std::unique_ptr<UiScriptRunner> script_;
+  std::shared_ptr<const RenderSettings> drawn_settings_;  // handed to the frame loop; new when the state changed
+  uint64_t drawn_revision_ = UINT64_MAX;
+  std::chrono::steady_clock::time_point last_frame_start_{};
+  double frame_ms_ = 0.0;
+  // This frame's swapchain image (acquired in record_after_views).
+  bool image_acquired_ = false;
+  uint32_t image_index_ = 0;
+  // Screenshot of this frame's swapchain image: a host buffer the frame copies into.
+  std::string screenshot_pending_;
+  gpu::Buffer screenshot_buffer_;
+  // The store's markers and measurements, read again after each script edit.
+  uint64_t overlay_revision_ = UINT64_MAX;
+  std::vector<OverlayPoint> overlay_points_;
+  std::vector<std::array<OverlayPoint, 2>> overlay_lines_;
+  std::string overlay_summary_;
 };
 
 }  // namespace vxr::xr

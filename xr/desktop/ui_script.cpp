@@ -1,0 +1,210 @@
+#include "xr/desktop/ui_script.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/output_file.h"
+
+namespace vxr::xr {
+namespace {
+
+std::vector<std::string> words(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> w;
+  for (std::string tok; in >> tok;) w.push_back(tok);
+  return w;
+}
+
+bool parse_number(const std::string& s, double* out) {
+  char* end = nullptr;
+  *out = std::strtod(s.c_str(), &end);
+  return !s.empty() && end == s.c_str() + s.size() && std::isfinite(*out);
+}
+
+// The step's shape; viewer commands are checked by applying them to a copy.
+Result<UiStep> parse_step(const std::string& text) {
+  UiStep step;
+  step.text = text;
+  const std::vector<std::string> w = words(text);
+  if (w.empty()) return invalid_argument("empty step");
+  const std::string& cmd = w[0];
+  if (cmd == "ui") {
+    if (w.size() != 2 || (w[1] != "on" && w[1] != "off")) return invalid_argument("usage: ui on|off");
+    step.kind = UiStepKind::kUi;
+    step.on = w[1] == "on";
+  } else if (cmd == "wait") {
+    double n = 0;
+    if (w.size() != 2 || !parse_number(w[1], &n) || n < 1 || n > 100000 || n != std::floor(n))
+      return invalid_argument("usage: wait FRAMES (1..100000)");
+    step.kind = UiStepKind::kWait;
+    step.frames = uint64_t(n);
+  } else if (cmd == "screenshot") {
+    if (w.size() != 2) return invalid_argument("usage: screenshot PATH (no spaces)");
+    step.kind = UiStepKind::kScreenshot;
+    step.arg = w[1];
+  } else if (cmd == "count" || cmd == "measure") {
+    const size_t n = cmd == "count" ? 3 : 6;
+    if (w.size() != n + 1 && !(cmd == "count" && w.size() == n + 2))
+      return invalid_argument(cmd == "count" ? "usage: count X Y Z [CLASS]" : "usage: measure X Y Z X2 Y2 Z2");
+    for (size_t i = 0; i < n; ++i)
+      if (!parse_number(w[i + 1], &step.xyz[i])) return invalid_argument("'" + w[i + 1] + "' is not a number");
+    step.kind = cmd == "count" ? UiStepKind::kCount : UiStepKind::kMeasure;
+    step.arg = w.size() == n + 2 ? w[n + 1] : "default";
+  } else if (cmd == "card") {
+    if (w.size() < 2) return invalid_argument("usage: card TITLE");
+    step.kind = UiStepKind::kCard;
+    step.arg = text.substr(text.find("card") + 4);
+    step.arg.erase(0, step.arg.find_first_not_of(" \t"));
+  } else {
+    step.kind = UiStepKind::kViewer;
+  }
+  return step;
+}
+
+// Distinct colours for count classes, in the order they first appear.
+std::array<double, 4> class_colour(size_t index) {
+  static const std::array<double, 4> table[] = {
+      {1, 1, 0, 1}, {0, 1, 1, 1}, {1, 0, 1, 1}, {0, 1, 0, 1}, {1, 0.5, 0, 1}, {0.5, 0.5, 1, 1}};
+  return table[index % std::size(table)];
+}
+
+}  // namespace
+
+Status UiScript::step_error(size_t index, const std::string& why) const {
+  const std::string text = index < steps.size() ? steps[index].text : std::string();
+  return invalid_argument(path + ": step " + std::to_string(index + 1) + " ('" + text + "'): " + why);
+}
+
+Result<UiScript> load_ui_script(const std::string& path, const ViewerState& state,
+                                const std::vector<std::string>& inputs, bool have_store) {
+  VXR_RETURN_IF_ERROR(check_input(path));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return not_found(path + ": cannot open the UI script");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+  if (j.is_discarded()) return invalid_argument(path + ": not JSON");
+  if (j.is_object()) {
+    if (!j.contains("steps")) return invalid_argument(path + ": expected a list of steps or {\"steps\": [...]}");
+    j = j["steps"];
+  }
+  if (!j.is_array()) return invalid_argument(path + ": expected a list of steps or {\"steps\": [...]}");
+  if (j.empty()) return invalid_argument(path + ": the script has no steps");
+  UiScript script;
+  script.path = path;
+  ViewerState dry_run = state;
+  std::vector<std::string> shots;
+  for (size_t i = 0; i < j.size(); ++i) {
+    if (!j[i].is_string())
+      return invalid_argument(path + ": step " + std::to_string(i + 1) + ": expected a string, got " +
+                              std::string(j[i].type_name()));
+    auto step = parse_step(j[i].get<std::string>());
+    script.steps.push_back(step ? *step : UiStep{UiStepKind::kViewer, j[i].get<std::string>()});
+    if (!step) return script.step_error(i, step.status().message());
+    switch (step->kind) {
+      case UiStepKind::kViewer:
+        if (Status s = dry_run.apply_command(step->text); !s) return script.step_error(i, s.message());
+        break;
+      case UiStepKind::kScreenshot:
+        if (Status s = check_output(step->arg, inputs, "screenshot"); !s) return script.step_error(i, s.message());
+        for (const std::string& earlier : shots)
+          if (earlier == step->arg) return script.step_error(i, "an earlier step already writes " + earlier);
+        shots.push_back(step->arg);
+        break;
+      case UiStepKind::kCount:
+      case UiStepKind::kMeasure:
+      case UiStepKind::kCard:
+        if (!have_store) return script.step_error(i, "needs an annotation store (--annotations STORE)");
+        break;
+      case UiStepKind::kUi:
+      case UiStepKind::kWait: break;
+    }
+  }
+  return script;
+}
+
+UiScriptRunner::UiScriptRunner(UiScript script, annotate::AnnotationStore* store,
+                               std::function<Scene(const ViewerState&)> card_scene)
+    : script_(std::move(script)), store_(store), card_scene_(std::move(card_scene)) {
+  if (store_) palette_.emplace(*store_);
+}
+
+Result<UiScriptRunner::FrameWork> UiScriptRunner::before_frame(ViewerState& state) {
+  FrameWork work;
+  if (wait_ > 0) {
+    --wait_;
+    return work;
+  }
+  // State edits and tool events run back to back; a screenshot or a wait ends the frame's share.
+  while (next_ < script_.steps.size()) {
+    const size_t index = next_++;
+    const UiStep& step = script_.steps[index];
+    if (step.kind == UiStepKind::kScreenshot) {
+      work.screenshot = step.arg;
+      return work;
+    }
+    if (step.kind == UiStepKind::kWait) {
+      wait_ = step.frames - 1;
+      return work;
+    }
+    if (Status s = run_step(step, state); !s) return script_.step_error(index, s.message());
+  }
+  work.done = true;
+  return work;
+}
+
+Status UiScriptRunner::run_step(const UiStep& step, ViewerState& state) {
+  using annotate::ToolAction;
+  switch (step.kind) {
+    case UiStepKind::kViewer: return state.apply_command(step.text);
+    case UiStepKind::kUi:
+      if (state.ui_visible() != step.on) state.handle_key(ViewerKey::kToggleUi);
+      return Status::ok();
+    case UiStepKind::kCount: {
+      if (!palette_) return internal_error("no annotation store");
+      size_t index = 0;
+      for (; index < classes_.size() && classes_[index] != step.arg; ++index) {
+      }
+      if (index == classes_.size()) classes_.push_back(step.arg);
+      palette_->select_tool(annotate::Tool::kCount);
+      palette_->set_class(step.arg, class_colour(index));
+      VXR_RETURN_IF_ERROR(palette_->apply({ToolAction::kPress, {step.xyz[0], step.xyz[1], step.xyz[2]},
+                                           state.scene().timepoint}));
+      ++annotation_revision_;
+      return Status::ok();
+    }
+    case UiStepKind::kMeasure: {
+      if (!palette_) return internal_error("no annotation store");
+      const uint32_t t = state.scene().timepoint;
+      palette_->select_tool(annotate::Tool::kMeasure);
+      VXR_RETURN_IF_ERROR(palette_->apply({ToolAction::kPress, {step.xyz[0], step.xyz[1], step.xyz[2]}, t}));
+      VXR_RETURN_IF_ERROR(palette_->apply({ToolAction::kMove, {step.xyz[3], step.xyz[4], step.xyz[5]}, t}));
+      VXR_RETURN_IF_ERROR(palette_->apply({ToolAction::kRelease, {step.xyz[3], step.xyz[4], step.xyz[5]}, t}));
+      ++annotation_revision_;
+      return Status::ok();
+    }
+    case UiStepKind::kCard: {
+      if (!store_) return internal_error("no annotation store");
+      annotate::Card card;
+      card.title = step.arg;
+      card.scene_json = scene_to_json(card_scene_(state));
+      if (!last_screenshot_.empty()) {
+        std::ifstream in(last_screenshot_, std::ios::binary);
+        card.snapshot_png.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        if (!in.good() && !in.eof()) return io_error(last_screenshot_ + ": cannot read the screenshot back");
+      }
+      VXR_ASSIGN_OR_RETURN(annotate::Id id, store_->add_card(std::move(card)));
+      (void)id;
+      ++annotation_revision_;
+      return Status::ok();
+    }
+    case UiStepKind::kScreenshot:
+    case UiStepKind::kWait: break;
+  }
+  return Status::ok();
+}
+
+}  // namespace vxr::xr
