@@ -596,7 +596,7 @@ void DesktopTarget::draw_annotation_overlay(const ViewSpec& view) {
     return ImGui::GetColorU32(ImVec4(float(c[0]), float(c[1]), float(c[2]), float(c[3])));
   };
   ImDrawList* draw = ImGui::GetBackgroundDrawList();
-  const float radius = std::max(4.0f, float(view.height) / 100.0f);
+  const float radius = std::max(6.0f, float(view.height) / 60.0f);
   for (const auto& [a, b] : overlay_lines_) {
     ImVec2 pa, pb;
     if (project(a.voxel, &pa) && project(b.voxel, &pb)) {
@@ -609,7 +609,7 @@ void DesktopTarget::draw_annotation_overlay(const ViewSpec& view) {
     ImVec2 at;
     if (!project(p.voxel, &at)) continue;
     draw->AddCircleFilled(at, radius, colour(p.color));
-    draw->AddCircle(at, radius, IM_COL32(0, 0, 0, 255), 0, 1.5f);
+    draw->AddCircle(at, radius + 1.0f, IM_COL32(0, 0, 0, 255), 0, 2.0f);  // readable on bright data too
   }
   if (state_->ui_visible() && !overlay_summary_.empty()) {
     ImGui::SetNextWindowPos(ImVec2(float(view.width) - 250.0f, 10.0f), ImGuiCond_FirstUseEver);

@@ -79,7 +79,8 @@ void draw_viewer_panels(ViewerState& state, const PanelInputs& in) {
     channel_panel(state, in);
   }
   ImGui::End();
-  ImGui::SetNextWindowPos(ImVec2(10, 420), ImGuiCond_FirstUseEver);
+  // Bottom left, whatever the window's height.
+  ImGui::SetNextWindowPos(ImVec2(10, ImGui::GetIO().DisplaySize.y - 10), ImGuiCond_FirstUseEver, ImVec2(0, 1));
   if (ImGui::Begin("Rendering")) render_panel(state);
   ImGui::End();
   if (state.help_visible()) {

@@ -1,0 +1,198 @@
+// The desktop viewer under Xvfb, driven by a UI script (vxr view --desktop
+// --ui-script): the real MRI stack from ../shared/testdata, screenshots of the
+// swapchain image after each change, and the pixels checked: the panels are
+// drawn, a colour map change changes the hue, a narrower window brightens,
+// count markers and a measurement show, and the store holds what was placed.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "annotate/annotation_store.h"
+#include "core/image.h"
+#include "xr_test_util.h"
+
+using namespace vxr;
+
+namespace {
+
+const std::string kMri = std::string(VXR_TESTDATA_DIR) + "/slices/mri-stack";
+constexpr uint32_t kWidth = 480, kHeight = 360;
+
+std::string viewer_command(const std::string& script, const std::string& extra) {
+  return "xvfb-run -a -s '-screen 0 1024x768x24' " + std::string(VXR_BINARY) + " view " + kMri +
+         " --desktop --width " + std::to_string(kWidth) + " --height " + std::to_string(kHeight) + " --ui-script " +
+         script + " " + extra;
+}
+
+struct Tint {
+  double red = 0, green = 0, blue = 0, luminance = 0;  // red/green/blue: shares of r+g+b; luminance 0..255
+  size_t pixels = 0;
+};
+// Mean colour of the volume's pixels (any channel above `floor`) in rows [y0, y1).
+Tint tint(const ImageRgba8& img, uint32_t y0, uint32_t y1, int floor = 24) {
+  Tint t;
+  for (uint32_t y = y0; y < y1; ++y)
+    for (uint32_t x = 0; x < img.width; ++x) {
+      const uint8_t* p = img.at(x, y);
+      if (std::max({p[0], p[1], p[2]}) <= floor) continue;
+      const double sum = double(p[0]) + p[1] + p[2];
+      t.red += p[0] / sum;
+      t.green += p[1] / sum;
+      t.blue += p[2] / sum;
+      t.luminance += 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+      ++t.pixels;
+    }
+  if (t.pixels) {
+    t.red /= double(t.pixels);
+    t.green /= double(t.pixels);
+    t.blue /= double(t.pixels);
+    t.luminance /= double(t.pixels);
+  }
+  return t;
+}
+
+size_t count_exact(const ImageRgba8& img, uint8_t r, uint8_t g, uint8_t b) {
+  size_t n = 0;
+  for (uint32_t y = 0; y < img.height; ++y)
+    for (uint32_t x = 0; x < img.width; ++x) {
+      const uint8_t* p = img.at(x, y);
+      n += p[0] == r && p[1] == g && p[2] == b;
+    }
+  return n;
+}
+
+// Pixels of the box [x0, x1) x [y0, y1) that differ between two images.
+size_t differing(const ImageRgba8& a, const ImageRgba8& b, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1) {
+  size_t n = 0;
+  for (uint32_t y = y0; y < y1; ++y)
+    for (uint32_t x = x0; x < x1; ++x)
+      n += a.at(x, y)[0] != b.at(x, y)[0] || a.at(x, y)[1] != b.at(x, y)[1] || a.at(x, y)[2] != b.at(x, y)[2];
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("desktop viewer: a scripted session under Xvfb shows each change in its screenshots") {
+  const std::string dir = test::xr_out_dir("desktop_ui");
+  auto shot = [&](const std::string& name) { return dir + "/" + name + ".png"; };
+  const std::string script = dir + "/session.json";
+  // Volume-only shots hide the panels so hue and brightness are the volume's.
+  std::ofstream(script) << nlohmann::json::array({
+                               "wait 3",
+                               "ui off",
+                               "screenshot " + shot("plain"),
+                               "ui on",
+                               "wait 2",
+                               "screenshot " + shot("panels"),
+                               "ui off",
+                               "colormap 0 viridis",
+                               "screenshot " + shot("viridis"),
+                               "window 0 0 60",
+                               "screenshot " + shot("bright"),
+                               "count 90 110 13",
+                               "count 130 110 13",
+                               "measure 80 150 13 150 150 13",
+                               "screenshot " + shot("marked"),
+                               "card two cells and a distance",
+                           })
+                               .dump(1);
+  const std::string store_dir = dir + "/store";
+  const test::ChildResult r = test::run_child(viewer_command(script, "--annotations " + store_dir));
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);  // validation is on: any Vulkan message would exit 3
+  CHECK(r.output.find("using the desktop window") != std::string::npos);
+
+  std::map<std::string, ImageRgba8> img;
+  for (const char* name : {"plain", "panels", "viridis", "bright", "marked"}) {
+    auto png = read_png(shot(name));
+    REQUIRE_MESSAGE(png.is_ok(), name);
+    REQUIRE(png->width == kWidth);
+    REQUIRE(png->height == kHeight);
+    img[name] = std::move(png).value();
+  }
+
+  // The volume is there: a good share of the window is lit.
+  const Tint plain = tint(img["plain"], 0, kHeight);
+  MESSAGE("plain: " << plain.pixels << " lit pixels, shares r/g/b " << plain.red << "/" << plain.green << "/"
+                    << plain.blue << ", luminance " << plain.luminance);
+  CHECK(plain.pixels > kWidth * kHeight / 10);
+
+  // Panels: the channel panel (top left, 340 px wide) covers pixels the bare render shows otherwise.
+  const size_t panel_area = 300 * 100;
+  const size_t changed = differing(img["plain"], img["panels"], 10, 10, 310, 110);
+  MESSAGE("panel box: " << changed << " of " << panel_area << " pixels differ from the render without panels");
+  CHECK(changed > panel_area / 2);
+  // ... and not the volume's middle right of it, which the panels leave alone.
+  CHECK(differing(img["plain"], img["panels"], kWidth / 2 + 40, kHeight / 2 - 20, kWidth - 20, kHeight / 2 + 20) == 0);
+
+  // hot -> viridis: from red-dominated to green/blue.
+  const Tint viridis = tint(img["viridis"], 0, kHeight);
+  MESSAGE("viridis: shares r/g/b " << viridis.red << "/" << viridis.green << "/" << viridis.blue);
+  CHECK(plain.red > plain.blue + 0.2);
+  CHECK(viridis.blue > plain.blue + 0.1);
+  CHECK(viridis.red < plain.red - 0.1);
+
+  // Window 0..60 instead of the data's: the same data maps further up the map: brighter.
+  const Tint bright = tint(img["bright"], 0, kHeight);
+  MESSAGE("luminance: window from the data " << viridis.luminance << ", window 0..60 " << bright.luminance);
+  CHECK(bright.luminance > viridis.luminance * 1.15);
+
+  // Markers (class "default": pure yellow discs) and the measurement (a white line) are drawn over the volume.
+  const size_t yellow_before = count_exact(img["bright"], 255, 255, 0), yellow = count_exact(img["marked"], 255, 255, 0);
+  const size_t white_before = count_exact(img["bright"], 255, 255, 255), white = count_exact(img["marked"], 255, 255, 255);
+  MESSAGE("pure yellow pixels " << yellow_before << " -> " << yellow << ", pure white " << white_before << " -> " << white);
+  CHECK(yellow >= yellow_before + 2 * 60);  // two discs of radius 6+
+  CHECK(white >= white_before + 40);        // a 70-voxel line, 2 px wide
+
+  // The store holds what the session placed, and the card its scene and the last screenshot.
+  auto store = annotate::AnnotationStore::open(store_dir, false);
+  REQUIRE(store.is_ok());
+  auto markers = (*store)->markers();
+  REQUIRE(markers.is_ok());
+  CHECK(markers->size() == 2);
+  auto measurements = (*store)->measurements();
+  REQUIRE(measurements.is_ok());
+  REQUIRE(measurements->size() == 1);
+  CHECK((*store)->length(measurements->front()) == doctest::Approx(70.0 * (*store)->voxel_space().voxel_size[0]));
+  auto cards = (*store)->cards();
+  REQUIRE(cards.is_ok());
+  REQUIRE(cards->size() == 1);
+  auto card = (*store)->card(cards->front().id, true);
+  REQUIRE(card.is_ok());
+  CHECK(card->title == "two cells and a distance");
+  CHECK(card->scene_json.find("viridis") != std::string::npos);
+  std::ifstream marked(shot("marked"), std::ios::binary);
+  const std::vector<uint8_t> marked_bytes((std::istreambuf_iterator<char>(marked)), std::istreambuf_iterator<char>());
+  CHECK(card->snapshot_png == marked_bytes);
+}
+
+TEST_CASE("desktop viewer: a bad UI script is one line naming the file and the step") {
+  const std::string dir = test::xr_out_dir("desktop_ui_bad");
+  struct Case {
+    nlohmann::json steps;
+    std::string expect;
+  };
+  const Case cases[] = {
+      {nlohmann::json::array({"wait 1", "colormap 0 no-such-map"}), "step 2 ('colormap 0 no-such-map'): "},
+      {nlohmann::json::array({"count 1 2 3"}), "step 1 ('count 1 2 3'): needs an annotation store"},
+      {nlohmann::json::array({"wait 1", "window 0 50 10"}), "step 2 ('window 0 50 10'): "},
+      {nlohmann::json::array({"screenshot " + kMri}), "step 1 ('screenshot "},
+      {nlohmann::json::array({"wait 1", 7}), "step 2: expected a string"},
+      {nlohmann::json::object({{"no", "steps"}}), "expected a list of steps"},
+  };
+  int index = 0;
+  for (const Case& c : cases) {
+    const std::string script = dir + "/bad" + std::to_string(index++) + ".json";
+    std::ofstream(script) << c.steps.dump();
+    // Checked before any window opens: no Xvfb needed.
+    const test::ChildResult r = test::run_child(std::string(VXR_BINARY) + " view " + kMri +
+                                                " --desktop --ui-script " + script);
+    INFO(r.output);
+    CHECK(r.exit_code == 2);
+    CHECK(r.output.find(script + ": " + (c.expect.rfind("step", 0) == 0 ? c.expect : "")) != std::string::npos);
+    CHECK(r.output.find(c.expect) != std::string::npos);
+    CHECK(std::count(r.output.begin(), r.output.end(), '\n') == 1);
+  }
+}
