@@ -76,7 +76,10 @@ std::array<double, 4> class_colour(size_t index) {
 
 Status UiScript::step_error(size_t index, const std::string& why) const {
   const std::string text = index < steps.size() ? steps[index].text : std::string();
-  return invalid_argument(path + ": step " + std::to_string(index + 1) + " ('" + text + "'): " + why);
+  // Viewer commands already quote themselves ("'LINE': WHY"): say it once.
+  const std::string quoted = "'" + text + "': ";
+  const std::string reason = why.rfind(quoted, 0) == 0 ? why.substr(quoted.size()) : why;
+  return invalid_argument(path + ": step " + std::to_string(index + 1) + " ('" + text + "'): " + reason);
 }
 
 Result<UiScript> load_ui_script(const std::string& path, const ViewerState& state,
