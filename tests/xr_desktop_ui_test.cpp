@@ -91,6 +91,9 @@ TEST_CASE("desktop viewer: a scripted session under Xvfb shows each change in it
                                "screenshot " + shot("viridis"),
                                "window 0 0 60",
                                "screenshot " + shot("bright"),
+                               "visible 0 off",
+                               "screenshot " + shot("hidden"),
+                               "visible 0 on",
                                "count 90 110 13",
                                "count 130 110 13",
                                "measure 80 150 13 150 150 13",
@@ -105,7 +108,7 @@ TEST_CASE("desktop viewer: a scripted session under Xvfb shows each change in it
   CHECK(r.output.find("using the desktop window") != std::string::npos);
 
   std::map<std::string, ImageRgba8> img;
-  for (const char* name : {"plain", "panels", "viridis", "bright", "marked"}) {
+  for (const char* name : {"plain", "panels", "viridis", "bright", "hidden", "marked"}) {
     auto png = read_png(shot(name));
     REQUIRE_MESSAGE(png.is_ok(), name);
     REQUIRE(png->width == kWidth);
@@ -138,6 +141,9 @@ TEST_CASE("desktop viewer: a scripted session under Xvfb shows each change in it
   const Tint bright = tint(img["bright"], 0, kHeight);
   MESSAGE("luminance: window from the data " << viridis.luminance << ", window 0..60 " << bright.luminance);
   CHECK(bright.luminance > viridis.luminance * 1.15);
+
+  // The only channel hidden: nothing drawn.
+  CHECK(tint(img["hidden"], 0, kHeight, 0).pixels == 0);
 
   // Markers (class "default": pure yellow discs) and the measurement (a white line) are drawn over the volume.
   const size_t yellow_before = count_exact(img["bright"], 255, 255, 0), yellow = count_exact(img["marked"], 255, 255, 0);

@@ -534,7 +534,10 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   if (!o_.stereo) draw_annotation_overlay(mono);
   ui_->end();
 
-  if (state_->revision() != drawn_revision_ || !drawn_settings_) {
+  // Every channel hidden: nothing to cast; record_after_views clears the window instead.
+  const auto& channels = state_->render().channels;
+  nothing_visible_ = std::none_of(channels.begin(), channels.end(), [](const ChannelSettings& c) { return c.enabled; });
+  if (!nothing_visible_ && (state_->revision() != drawn_revision_ || !drawn_settings_)) {
     drawn_settings_ = std::make_shared<const RenderSettings>(state_->render());
     drawn_revision_ = state_->revision();
   }
@@ -542,7 +545,8 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   f.timepoint = state_->scene().timepoint;
   f.should_render = true;
   f.display_time_ns = int64_t(frame_) * 16666667;
-  f.views = o_.stereo ? stereo_views(head, o_.ipd_m, fov, o_.width, o_.height) : std::vector<ViewSpec>{mono};
+  if (!nothing_visible_)
+    f.views = o_.stereo ? stereo_views(head, o_.ipd_m, fov, o_.width, o_.height) : std::vector<ViewSpec>{mono};
   return Status::ok();
 }
 
@@ -631,8 +635,13 @@ Status DesktopTarget::record_after_views(VkCommandBuffer cmd, FrameSubmit& submi
     return gpu_error("vkAcquireNextImageKHR failed: " + std::string(gpu::vk_result_name(r)));
   const VkImage target = swap_images_[index];
   image_barrier(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+  if (nothing_visible_) {
+    const VkClearColorValue black{{0.0f, 0.0f, 0.0f, 1.0f}};
+    const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    vkCmdClearColorImage(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &black, 1, &all);
+  }
   const int32_t slot_w = int32_t(swap_extent_.width / eyes_.size());
-  for (size_t v = 0; v < eyes_.size(); ++v) {
+  for (size_t v = 0; v < eyes_.size() && !nothing_visible_; ++v) {
     const gpu::Image& e = eyes_[v];
     VkImageBlit blit{};
     blit.srcSubresource = blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};

@@ -123,6 +123,7 @@ class DesktopTarget : public FrameTarget {
   std::unique_ptr<UiScriptRunner> script_;
   std::shared_ptr<const RenderSettings> drawn_settings_;  // handed to the frame loop; new when the state changed
   uint64_t drawn_revision_ = UINT64_MAX;
+  bool nothing_visible_ = false;  // every channel hidden: the window is cleared, no rays cast
   std::chrono::steady_clock::time_point last_frame_start_{};
   double frame_ms_ = 0.0;
   // This frame's swapchain image (acquired in record_after_views).
