@@ -202,3 +202,30 @@ TEST_CASE("desktop viewer: a bad UI script is one line naming the file and the s
     CHECK(std::count(r.output.begin(), r.output.end(), '\n') == 1);
   }
 }
+
+TEST_CASE("desktop viewer: the window follows a resize and the next viewer opens at that size") {
+  const std::string dir = test::xr_out_dir("desktop_ui_resize");
+  const std::string config = dir + "/config";  // XDG_CONFIG_HOME of both runs: the user's own is left alone
+  const std::string first = dir + "/first.json", second = dir + "/second.json";
+  std::ofstream(first) << nlohmann::json::array({"wait 2", "resize 400 300", "wait 2", "screenshot " + dir + "/resized.png"});
+  std::ofstream(second) << nlohmann::json::array({"wait 2", "screenshot " + dir + "/reopened.png"});
+  const test::ChildResult a = test::run_child("XDG_CONFIG_HOME=" + config + " " + viewer_command(first, ""));
+  INFO(a.output);
+  REQUIRE(a.exit_code == 0);
+  auto resized = read_png(dir + "/resized.png");
+  REQUIRE(resized.is_ok());
+  CHECK(resized->width == 400);
+  CHECK(resized->height == 300);
+  CHECK(tint(*resized, 0, 300).pixels > 400 * 300 / 20);  // the volume drawn at the new size, not a stale image
+
+  // Without --width/--height the viewer opens at the size the user left.
+  const std::string reopen = "XDG_CONFIG_HOME=" + config + " xvfb-run -a -s '-screen 0 1024x768x24' " +
+                             std::string(VXR_BINARY) + " view " + kMri + " --desktop --ui-script " + second;
+  const test::ChildResult b = test::run_child(reopen);
+  INFO(b.output);
+  REQUIRE(b.exit_code == 0);
+  auto reopened = read_png(dir + "/reopened.png");
+  REQUIRE(reopened.is_ok());
+  CHECK(reopened->width == 400);
+  CHECK(reopened->height == 300);
+}

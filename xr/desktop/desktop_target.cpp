@@ -64,7 +64,8 @@ Result<std::unique_ptr<DesktopTarget>> DesktopTarget::create(const DesktopOption
   VXR_RETURN_IF_ERROR(init_glfw());
   std::unique_ptr<DesktopTarget> t(new DesktopTarget(o));
   glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
-  glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
+  // The viewer follows the window's size (and remembers it); the bare window keeps its eye size.
+  glfwWindowHint(GLFW_RESIZABLE, o.viewer ? GLFW_TRUE : GLFW_FALSE);
   const int w = int(o.stereo ? 2 * o.width : o.width);
   t->window_ = glfwCreateWindow(w, int(o.height), "vxr", nullptr, nullptr);
   if (!t->window_) return unsupported("cannot open a " + std::to_string(w) + "x" + std::to_string(o.height) +
@@ -87,6 +88,7 @@ Result<std::unique_ptr<DesktopTarget>> DesktopTarget::create(const DesktopOption
     DesktopTarget* target = self(win);
     if (k && target->state_ && !ImGuiLayer::wants_keyboard()) target->state_->handle_key(*k);
   });
+  glfwSetFramebufferSizeCallback(t->window_, [](GLFWwindow* win, int, int) { self(win)->resized_ = true; });
   if (t->state_) glfwSetWindowTitle(t->window_, viewer_window_title(o.viewer->dataset, 0.0).c_str());
   return t;
 }
@@ -181,6 +183,16 @@ Status DesktopTarget::attach(gpu::Context& ctx) {
   fence_ = gpu::Handle<VkFence>(ctx.device(), fence);
 
   VXR_RETURN_IF_ERROR(create_swapchain());
+  VXR_RETURN_IF_ERROR(create_eyes());
+  if (state_) {
+    VXR_ASSIGN_OR_RETURN(ui_, ImGuiLayer::create(window_, ctx, swap_format_, swap_images_, swap_extent_));
+    last_frame_start_ = std::chrono::steady_clock::now();
+  }
+  return Status::ok();
+}
+
+Status DesktopTarget::create_eyes() {
+  eyes_.clear();
   // Eyes in the swapchain's encoding: on an sRGB window the renderer writes
   // linear values the format encodes (as on an sRGB headset swapchain), and
   // the blit copies the encoded bytes unchanged (decode + encode).
@@ -188,22 +200,33 @@ Status DesktopTarget::attach(gpu::Context& ctx) {
   const VkFormat eye_format = srgb ? VK_FORMAT_R8G8B8A8_SRGB : VK_FORMAT_R8G8B8A8_UNORM;
   for (int v = 0; v < (o_.stereo ? 2 : 1); ++v) {
     VXR_ASSIGN_OR_RETURN(gpu::Image img,
-                         gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, eye_format, {o_.width, o_.height, 1},
-                                                 VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
-                                                     VK_IMAGE_USAGE_SAMPLED_BIT |
-                                                     (srgb ? 0u : VK_IMAGE_USAGE_STORAGE_BIT),
-                                                 "desktop eye"}));
-    VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+                         gpu::create_image(*ctx_, {VK_IMAGE_TYPE_2D, eye_format, {o_.width, o_.height, 1},
+                                                   VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                                                       VK_IMAGE_USAGE_SAMPLED_BIT |
+                                                       (srgb ? 0u : VK_IMAGE_USAGE_STORAGE_BIT),
+                                                   "desktop eye"}));
+    VXR_RETURN_IF_ERROR(ctx_->submit_and_wait([&](VkCommandBuffer cmd) {
       image_barrier(cmd, img.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                     VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
     }));
     eyes_.push_back(std::move(img));
   }
-  if (state_) {
-    VXR_ASSIGN_OR_RETURN(ui_, ImGuiLayer::create(window_, ctx, swap_format_, swap_images_, swap_extent_));
-    last_frame_start_ = std::chrono::steady_clock::now();
-  }
   return Status::ok();
+}
+
+// The viewer's window was resized: swapchain, eyes and panels follow its framebuffer.
+Status DesktopTarget::follow_window_size() {
+  int w = 0, h = 0;
+  glfwGetFramebufferSize(window_, &w, &h);
+  if (w <= 0 || h <= 0) return Status::ok();  // minimised: keep the old size until it comes back
+  resized_ = false;
+  const uint32_t eye_w = o_.stereo ? std::max(1, w / 2) : uint32_t(w);
+  if (eye_w == o_.width && uint32_t(h) == o_.height) return Status::ok();
+  o_.width = eye_w;
+  o_.height = uint32_t(h);
+  user_resized_ = true;
+  VXR_RETURN_IF_ERROR(recreate_swapchain());
+  return create_eyes();
 }
 
 Status DesktopTarget::create_swapchain() {
@@ -277,6 +300,15 @@ Status DesktopTarget::recreate_swapchain() {
 }
 
 void DesktopTarget::detach() {
+  if (state_ && user_resized_) {
+    // The next viewer opens at the size the user left this one.
+    const std::string config = viewer_config_path();
+    if (!config.empty())
+      if (Status s = save_window_geometry(config, {std::max(64u, o_.stereo ? 2 * o_.width : o_.width),
+                                                               std::max(64u, o_.height)}); !s)
+        log_warn("viewer: window size not remembered: " + s.message());
+    user_resized_ = false;
+  }
   if (!ctx_) return;
   ui_.reset();  // its framebuffers and pipeline go before the device
   screenshot_buffer_ = {};
@@ -301,6 +333,7 @@ Result<FrameState> DesktopTarget::wait_frame() {
   }
   if (glfwGetKey(window_, GLFW_KEY_ESCAPE) == GLFW_PRESS) glfwSetWindowShouldClose(window_, GLFW_TRUE);
   if (state_) {
+    if (resized_) VXR_RETURN_IF_ERROR(follow_window_size());
     VXR_RETURN_IF_ERROR(viewer_frame(f));
     return f;
   }
@@ -515,6 +548,8 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
       return Status::ok();
     }
     screenshot_pending_ = work.screenshot;
+    // Takes effect when the X server says so: the framebuffer callback, then follow_window_size().
+    if (work.resize[0] > 0) glfwSetWindowSize(window_, work.resize[0], work.resize[1]);
   }
   if (state_->quit_requested()) glfwSetWindowShouldClose(window_, GLFW_TRUE);
   glfwSetWindowTitle(window_, viewer_window_title(setup.dataset, frame_ms_).c_str());

@@ -90,6 +90,8 @@ class DesktopTarget : public FrameTarget {
   Status create_swapchain();
   void destroy_swapchain();
   Status recreate_swapchain();
+  Status create_eyes();
+  Status follow_window_size();
   Pose head_pose() const;
   // The viewer's frame: script steps, panels, overlay, settings and views.
   Status viewer_frame(FrameState& f);
@@ -123,7 +125,9 @@ class DesktopTarget : public FrameTarget {
   std::unique_ptr<UiScriptRunner> script_;
   std::shared_ptr<const RenderSettings> drawn_settings_;  // handed to the frame loop; new when the state changed
   uint64_t drawn_revision_ = UINT64_MAX;
-  bool nothing_visible_ = false;  // every channel hidden: the window is cleared, no rays cast
+  bool nothing_visible_ = false;
+  bool resized_ = false;       // the framebuffer size changed since the last frame
+  bool user_resized_ = false;  // ... at least once: remember the size at exit  // every channel hidden: the window is cleared, no rays cast
   std::chrono::steady_clock::time_point last_frame_start_{};
   double frame_ms_ = 0.0;
   // This frame's swapchain image (acquired in record_after_views).

@@ -42,6 +42,12 @@ Result<UiStep> parse_step(const std::string& text) {
       return invalid_argument("usage: wait FRAMES (1..100000)");
     step.kind = UiStepKind::kWait;
     step.frames = uint64_t(n);
+  } else if (cmd == "resize") {
+    if (w.size() != 3 || !parse_number(w[1], &step.xyz[0]) || !parse_number(w[2], &step.xyz[1]) ||
+        step.xyz[0] < 64 || step.xyz[1] < 64 || step.xyz[0] > 8192 || step.xyz[1] > 8192 ||
+        step.xyz[0] != std::floor(step.xyz[0]) || step.xyz[1] != std::floor(step.xyz[1]))
+      return invalid_argument("usage: resize WIDTH HEIGHT (64..8192 pixels)");
+    step.kind = UiStepKind::kResize;
   } else if (cmd == "screenshot") {
     if (w.size() != 2) return invalid_argument("usage: screenshot PATH (no spaces)");
     step.kind = UiStepKind::kScreenshot;
@@ -123,7 +129,8 @@ Result<UiScript> load_ui_script(const std::string& path, const ViewerState& stat
         if (!have_store) return script.step_error(i, "needs an annotation store (--annotations STORE)");
         break;
       case UiStepKind::kUi:
-      case UiStepKind::kWait: break;
+      case UiStepKind::kWait:
+      case UiStepKind::kResize: break;
     }
   }
   return script;
@@ -151,6 +158,10 @@ Result<UiScriptRunner::FrameWork> UiScriptRunner::before_frame(ViewerState& stat
     }
     if (step.kind == UiStepKind::kWait) {
       wait_ = step.frames - 1;
+      return work;
+    }
+    if (step.kind == UiStepKind::kResize) {
+      work.resize = {int(step.xyz[0]), int(step.xyz[1])};
       return work;
     }
     if (Status s = run_step(step, state); !s) return script_.step_error(index, s.message());
@@ -205,7 +216,8 @@ Status UiScriptRunner::run_step(const UiStep& step, ViewerState& state) {
       return Status::ok();
     }
     case UiStepKind::kScreenshot:
-    case UiStepKind::kWait: break;
+    case UiStepKind::kWait:
+    case UiStepKind::kResize: break;
   }
   return Status::ok();
 }

@@ -7,6 +7,7 @@
 //                             "reset", "view 3" (ViewerState::apply_command)
 //   ui on|off                 show or hide the panels
 //   wait N                    render N more frames first
+//   resize W H                the window to W x H pixels (the viewer follows it and remembers it)
 //   screenshot PATH           this frame's swapchain image, panels included, as a PNG
 //   count X Y Z [CLASS]       a count marker at voxel (X, Y, Z)      } through the ToolPalette,
 //   measure X Y Z X2 Y2 Z2    a measurement between two voxels       } into --annotations STORE
@@ -28,13 +29,13 @@
 
 namespace vxr::xr {
 
-enum class UiStepKind { kViewer, kUi, kWait, kScreenshot, kCount, kMeasure, kCard };
+enum class UiStepKind { kViewer, kUi, kWait, kResize, kScreenshot, kCount, kMeasure, kCard };
 
 struct UiStep {
   UiStepKind kind = UiStepKind::kViewer;
   std::string text;                 // as written (viewer commands are applied from it)
   std::string arg;                  // screenshot path, count class, card title
-  std::array<double, 6> xyz{};      // count: 3, measure: 6 voxel coordinates
+  std::array<double, 6> xyz{};      // count: 3, measure: 6 voxel coordinates; resize: width, height
   uint64_t frames = 0;              // wait
   bool on = true;                   // ui
 };
@@ -63,6 +64,7 @@ class UiScriptRunner {
   // What the frame about to be drawn must do besides drawing.
   struct FrameWork {
     std::string screenshot;  // read this frame back into this PNG
+    std::array<int, 2> resize{0, 0};  // > 0: resize the window to this
     bool done = false;       // every step ran: close the window
   };
   // Applies the steps due before this frame (state edits, tool events).

@@ -81,6 +81,7 @@ void draw_viewer_panels(ViewerState& state, const PanelInputs& in) {
   ImGui::End();
   // Bottom left, whatever the window's height.
   ImGui::SetNextWindowPos(ImVec2(10, ImGui::GetIO().DisplaySize.y - 10), ImGuiCond_FirstUseEver, ImVec2(0, 1));
+  ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
   if (ImGui::Begin("Rendering")) render_panel(state);
   ImGui::End();
   if (state.help_visible()) {
