@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <random>
 
 #include "golden.h"
 #include "gpu_fixture.h"
@@ -40,7 +42,83 @@ ImageRgba8 converge(BrickRenderer& r, const Camera& cam, const RenderSettings& s
   return {};
 }
 
+// The direct definition: every texel of the cell's range, as floats, std::min/max from +-inf.
+std::vector<glm::vec2> direct_cell_ranges(VkFormat format, const uint8_t* texels, uint32_t cs, uint32_t apron,
+                                          const BrickCells& cells) {
+  const uint32_t edge = cs + 2 * apron, n = cells.cells_per_axis, s = cells.cell_size;
+  auto value = [&](size_t i) -> float {
+    if (format == VK_FORMAT_R8_UNORM) return float(texels[i]) / 255.0f;
+    if (format == VK_FORMAT_R16_UNORM) {
+      uint16_t v;
+      std::memcpy(&v, texels + 2 * i, 2);
+      return float(v) / 65535.0f;
+    }
+    float v;
+    std::memcpy(&v, texels + 4 * i, 4);
+    return v;
+  };
+  auto lo_of = [&](uint32_t k) { return uint32_t(std::max<int64_t>(int64_t(k) * s - 1 + apron, 0)); };
+  auto hi_of = [&](uint32_t k) { return uint32_t(std::min<int64_t>(int64_t(k) * s + s + apron, edge - 1)); };
+  std::vector<glm::vec2> out(cells.count());
+  for (uint32_t cz = 0; cz < n; ++cz)
+    for (uint32_t cy = 0; cy < n; ++cy)
+      for (uint32_t cx = 0; cx < n; ++cx) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (uint32_t z = lo_of(cz); z <= hi_of(cz); ++z)
+          for (uint32_t y = lo_of(cy); y <= hi_of(cy); ++y)
+            for (uint32_t x = lo_of(cx); x <= hi_of(cx); ++x) {
+              const float v = value((size_t(z) * edge + y) * edge + x);
+              lo = std::min(lo, v);
+              hi = std::max(hi, v);
+            }
+        const float pad_lo = std::abs(lo) * 1e-5f + 1e-7f, pad_hi = std::abs(hi) * 1e-5f + 1e-7f;
+        out[(size_t(cz) * n + cy) * n + cx] = glm::vec2(lo - pad_lo, hi + pad_hi);
+      }
+  return out;
+}
+
 }  // namespace
+
+TEST_CASE("empty-space cells: the separable min/max equals the direct 3D loop bit for bit (u8, u16, f32 with NaN)") {
+  std::mt19937 rng(7);
+  for (const VkFormat format : {VK_FORMAT_R8_UNORM, VK_FORMAT_R16_UNORM, VK_FORMAT_R32_SFLOAT})
+    for (const auto& [cs, apron] : {std::pair{16u, 1u}, std::pair{30u, 2u}, std::pair{61u, 1u}, std::pair{7u, 0u}}) {
+      CAPTURE(format);
+      CAPTURE(cs);
+      const uint32_t edge = cs + 2 * apron, bytes = format == VK_FORMAT_R8_UNORM ? 1 : format == VK_FORMAT_R16_UNORM ? 2 : 4;
+      const size_t n = size_t(edge) * edge * edge;
+      std::vector<uint8_t> texels(n * bytes);
+      // Sparse bright spots on a dim floor, so cells differ; floats get NaNs, infinities and -0.
+      for (size_t i = 0; i < n; ++i) {
+        const uint32_t r = rng();
+        const bool spot = r % 97 == 0;
+        if (bytes == 1) texels[i] = uint8_t(spot ? r >> 8 : r % 5);
+        if (bytes == 2) {
+          const uint16_t v = uint16_t(spot ? r >> 8 : r % 300);
+          std::memcpy(&texels[2 * i], &v, 2);
+        }
+        if (bytes == 4) {
+          float v = spot ? float(int32_t(r >> 4) - (1 << 27)) * 1e-3f : float(r % 1000) * 1e-4f;
+          if (r % 389 == 0) v = NAN;
+          if (r % 1543 == 0) v = r % 2 ? INFINITY : -0.0f;
+          std::memcpy(&texels[4 * i], &v, 4);
+        }
+      }
+      if (bytes == 4)  // one cell (the first) wholly NaN: the direct loop's (inf, -inf) padding
+        for (uint32_t z = 0; z < std::min(edge, 10u); ++z)
+          for (uint32_t y = 0; y < std::min(edge, 10u); ++y)
+            for (uint32_t x = 0; x < std::min(edge, 10u); ++x) {
+              const float v = NAN;
+              std::memcpy(&texels[4 * ((size_t(z) * edge + y) * edge + x)], &v, 4);
+            }
+      const BrickCells cells = brick_cells_for(cs);
+      std::vector<glm::vec2> got(cells.count());
+      compute_cell_ranges(format, texels.data(), cs, apron, cells, got.data());
+      const auto want = direct_cell_ranges(format, texels.data(), cs, apron, cells);
+      REQUIRE(std::memcmp(got.data(), want.data(), got.size() * sizeof(glm::vec2)) == 0);
+    }
+}
+
 
 TEST_CASE("empty-space cells: ranges cover every voxel a sample within half a voxel of the cell filters") {
   // One R8 slot, chunk 16, apron 1: 18^3 texels, 2 cells of 8 voxels per axis.
