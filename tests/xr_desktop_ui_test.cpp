@@ -11,6 +11,8 @@
 
 #include "annotate/annotation_store.h"
 #include "core/image.h"
+#include "volume/dense_chunk_source.h"
+#include "xr/desktop/viewer_setup.h"
 #include "xr_test_util.h"
 
 using namespace vxr;
@@ -127,8 +129,8 @@ TEST_CASE("desktop viewer: a scripted session under Xvfb shows each change in it
   const size_t changed = differing(img["plain"], img["panels"], 10, 10, 310, 110);
   MESSAGE("panel box: " << changed << " of " << panel_area << " pixels differ from the render without panels");
   CHECK(changed > panel_area / 2);
-  // ... and not the volume's middle right of it, which the panels leave alone.
-  CHECK(differing(img["plain"], img["panels"], kWidth / 2 + 40, kHeight / 2 - 20, kWidth - 20, kHeight / 2 + 20) == 0);
+  // ... and not the volume right of the panels (they are 340 px wide from x = 10).
+  CHECK(differing(img["plain"], img["panels"], 360, kHeight / 2 - 20, kWidth - 20, kHeight / 2 + 20) == 0);
 
   // hot -> viridis: from red-dominated to green/blue.
   const Tint viridis = tint(img["viridis"], 0, kHeight);
@@ -228,4 +230,42 @@ TEST_CASE("desktop viewer: the window follows a resize and the next viewer opens
   REQUIRE(reopened.is_ok());
   CHECK(reopened->width == 400);
   CHECK(reopened->height == 300);
+}
+
+TEST_CASE("desktop viewer: the panel histogram counts every interior voxel once") {
+  // 70 x 40 x 9 u16 in chunks of 32 (edge chunks at level 0): voxel value x * 900, bins 1000 wide.
+  DenseVolume v;
+  v.dims = {70, 40, 9};
+  v.dtype = DType::kU16;
+  v.data.resize(v.byte_size());
+  auto* voxels = reinterpret_cast<uint16_t*>(v.data.data());
+  for (uint32_t z = 0; z < 9; ++z)
+    for (uint32_t y = 0; y < 40; ++y)
+      for (uint32_t x = 0; x < 70; ++x) voxels[(size_t(z) * 40 + y) * 70 + x] = uint16_t(x * 900);
+  std::vector<DenseVolume> channels{v};
+  auto source = DenseChunkSource::create(std::move(channels), 32, 2);
+  REQUIRE(source.is_ok());
+  // Level 0 has 3 x 2 x 1 chunks: allowed as it is.
+  auto h = xr::coarse_histogram(**source, 0, 0, {0.0, 70000.0}, 70, 6);
+  REQUIRE(h.is_ok());
+  REQUIRE(h->size() == 70);
+  double total = 0;
+  for (size_t b = 0; b < 70; ++b) {
+    const double count = std::round(std::expm1(double((*h)[b])));  // stored as float log1p
+    total += count;
+    // Column x falls in bin floor(x * 900 / 1000): each filled bin holds one or two whole columns.
+    if (count > 0) CHECK(std::fmod(count, 40.0 * 9.0) == 0.0);
+  }
+  CHECK(total == doctest::Approx(70.0 * 40 * 9).epsilon(1e-5));
+  // A chunk budget of 1: the coarsest level that fits, 35 x 20 x 5 voxels (halved along x and y, maybe z).
+  auto coarse = xr::coarse_histogram(**source, 0, 0, {0.0, 70000.0}, 70, 1);
+  REQUIRE(coarse.is_ok());
+  double coarse_total = 0;
+  for (float c : *coarse) coarse_total += std::round(std::expm1(double(c)));
+  const LevelInfo* fit = nullptr;
+  for (const LevelInfo& l : (*source)->levels())
+    if (!fit && uint64_t(l.chunk_counts[0]) * l.chunk_counts[1] * l.chunk_counts[2] <= 1) fit = &l;
+  REQUIRE(fit != nullptr);
+  CHECK(coarse_total == doctest::Approx(double(fit->dims[0] * fit->dims[1] * fit->dims[2])).epsilon(1e-5));
+  CHECK_FALSE(xr::coarse_histogram(**source, 0, 0, {5.0, 5.0}).is_ok());
 }

@@ -87,6 +87,11 @@ Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, co
   setup->data_range = slider_range(info, session.settings);
   setup->placement = placement;
   setup->transform = transform;
+  for (uint32_t c = 0; c < std::max<size_t>(1, session.settings.channels.size()) && c < info.channels; ++c) {
+    auto histogram = xr::coarse_histogram(*session.source, c, 0, setup->data_range);
+    if (!histogram) return histogram.status();
+    setup->histograms.push_back(std::move(histogram).value());
+  }
   if (!o.annotations.empty()) {
     auto store = annotate::AnnotationStore::open(o.annotations, true);
     if (!store) return Status(store.status().code(), o.annotations + ": " + store.status().message());

@@ -562,6 +562,7 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   PanelInputs in;
   in.dataset = setup.dataset;
   in.frame_ms = frame_ms_;
+  in.histograms = setup.histograms;
   draw_viewer_panels(*state_, in);
   // The camera after this frame's edits (panels, keys, script), so a change shows in the frame that made it.
   const Pose head = pose_for_camera(viewer_world_camera(*state_, setup.placement), setup.transform);
