@@ -53,7 +53,7 @@ struct FrameState {
   std::vector<ViewSpec> views;  // filled when should_render
   InputState input;
   // A target with its own controls (the desktop viewer's panels) says what to
-  // draw this frame; empty: the session's settings and timepoint 0.
+  // draw this frame (settings and timepoint); empty: the session's.
   std::shared_ptr<const RenderSettings> settings;
   uint32_t timepoint = 0;
 };

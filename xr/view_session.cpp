@@ -117,7 +117,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
 
     BrickFrameSettings fs = options.frame;
     if (options.frame_budget_ms > 0.0) fs.lod.lod_bias = budget.bias;
-    fs.lod.timepoint = std::min(frame->timepoint, source->info().timepoints - 1);
+    if (frame->settings) fs.lod.timepoint = std::min(frame->timepoint, source->info().timepoints - 1);
     if (frame->settings && !(*frame->settings == drawn_settings)) {
       // An edit the brick renderer cannot draw keeps the last picture and says why.
       Status ok = check_brick_settings(*frame->settings, eyes->renderer().channels());

@@ -5,8 +5,11 @@
 //     -> attach -> chunk cache (loader threads) + eye renderer
 //     frame loop: wait_frame -> interaction -> ONE command buffer: brick
 //                 uploads that arrived, then every view (lens warp
-//                 included) recorded into the target's images -> one submit
-//                 -> end_frame
+//                 included) recorded into the target's images, then what
+//                 the target draws itself (record_after_views: the desktop
+//                 viewer's blit and panels) -> one submit -> end_frame
+//   a target with its own controls (FrameState::settings) changes the
+//   settings and timepoint the next views are drawn with
 //   a lost session/instance (wants_restart) tears everything down in order
 //   and starts again; any other error ends the run with its message.
 //
