@@ -18,15 +18,19 @@
 #include <cstdio>
 #include <cstdlib>
 #include <glm/gtc/quaternion.hpp>
+#include <fstream>
+#include <iterator>
 #include <map>
 
 #include "core/image.h"
 #include "core/log.h"
+#include "core/output_file.h"
 #include "gpu/vk_check.h"
 #include "xr/desktop/imgui_layer.h"
 #include "xr/desktop/viewer_keys.h"
 #include "xr/desktop/viewer_panels.h"
 #include "xr/desktop/viewer_setup.h"
+#include "xr/desktop/viewer_tools.h"
 #include "xr/eye_renderer.h"
 #include "xr/volume_transform.h"
 
@@ -80,6 +84,21 @@ Result<std::unique_ptr<DesktopTarget>> DesktopTarget::create(const DesktopOption
     g_last_x = x;
     g_last_y = y;
   });
+  // A click (press and release within a few pixels, not on a panel) places with the tools panel's tool.
+  glfwSetMouseButtonCallback(t->window_, [](GLFWwindow* win, int button, int action, int) {
+    DesktopTarget* target = self(win);
+    if (!target->tools_ || button != GLFW_MOUSE_BUTTON_LEFT) return;
+    double x = 0, y = 0;
+    glfwGetCursorPos(win, &x, &y);
+    if (action == GLFW_PRESS) {
+      target->press_x_ = x;
+      target->press_y_ = y;
+      target->press_on_ui_ = ImGuiLayer::wants_mouse();
+    } else if (action == GLFW_RELEASE && !target->press_on_ui_ &&
+               std::hypot(x - target->press_x_, y - target->press_y_) < 4.0) {
+      target->on_viewer_click(x, y);
+    }
+  });
   glfwSetScrollCallback(t->window_, [](GLFWwindow* win, double, double dy) { self(win)->on_scroll(dy); });
   // Keys through the callback: polling glfwGetKey once a frame misses a tap shorter than a frame.
   glfwSetKeyCallback(t->window_, [](GLFWwindow* win, int key, int, int action, int) {
@@ -96,23 +115,24 @@ Result<std::unique_ptr<DesktopTarget>> DesktopTarget::create(const DesktopOption
 DesktopTarget::DesktopTarget(const DesktopOptions& o) : o_(o) {
   if (o_.viewer) {
     state_ = std::make_unique<ViewerState>(o_.viewer->scene, o_.viewer->timepoints, o_.viewer->data_range);
-    if (o_.viewer->script) {
-      const VolumePlacement placement = o_.viewer->placement;
-      const uint32_t w = o_.width, h = o_.height;
-      script_ = std::make_unique<UiScriptRunner>(*o_.viewer->script, o_.viewer->store.get(),
-                                                 [placement, w, h](const ViewerState& state) {
-                                                   Scene scene = state.scene();
-                                                   scene.camera = viewer_world_camera(state, placement);
-                                                   scene.has_camera = true;
-                                                   scene.viewport = {w, h};
-                                                   return scene;
-                                                 });
+    if (o_.viewer->store) {
+      tools_ = std::make_unique<ViewerTools>(*o_.viewer->store);
+      panel_ = std::make_unique<ToolPanel>();
     }
+    if (o_.viewer->script)
+      script_ = std::make_unique<UiScriptRunner>(*o_.viewer->script, tools_.get(),
+                                                 [this](const ViewerState&) { return card_scene(); });
   }
 }
 
 void DesktopTarget::on_viewer_cursor(double dx, double dy) {
   if (ImGuiLayer::wants_mouse()) return;
+  if (tools_ && panel_->mode == ToolPanel::Mode::kMeasure && !o_.stereo) {
+    // The measurement being drawn follows the cursor.
+    double x = 0, y = 0;
+    glfwGetCursorPos(window_, &x, &y);
+    if (Status s = tools_->measure_hover(voxel_under(x, y), state_->scene().timepoint); !s) panel_->message = s.message();
+  }
   if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS)
     state_->orbit_drag(dx, dy);
   else if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
@@ -376,6 +396,11 @@ Status DesktopTarget::end_frame(const FrameState& frame, const FrameContent& con
     if (!image_acquired_) return Status::ok();
     image_acquired_ = false;
     if (!screenshot_pending_.empty()) VXR_RETURN_IF_ERROR(write_screenshot());
+    if (!card_shot_.empty()) {
+      if (Status s = save_panel_card(card_shot_); !s) panel_->message = s.message();
+      card_shot_.clear();
+      card_temp_.reset();
+    }
     VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
     VkSemaphore done = render_done_[image_index_];
     pi.waitSemaphoreCount = 1;
@@ -550,6 +575,19 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
     screenshot_pending_ = work.screenshot;
     // Takes effect when the X server says so: the framebuffer callback, then follow_window_size().
     if (work.resize[0] > 0) glfwSetWindowSize(window_, work.resize[0], work.resize[1]);
+    if (!work.tool.empty()) {
+      const std::string name = work.tool.substr(0, work.tool.find(' '));
+      tools_->cancel();
+      panel_->mode = name == "count"     ? ToolPanel::Mode::kCount
+                     : name == "measure" ? ToolPanel::Mode::kMeasure
+                                         : ToolPanel::Mode::kNavigate;
+      if (name == "count") std::snprintf(panel_->cls, sizeof panel_->cls, "%s", work.tool.substr(6).c_str());
+    }
+    if (work.click) {
+      on_viewer_click((*work.click)[0], (*work.click)[1]);
+      // A script stops at the first refused click, as at any refused step.
+      if (!click_error_.empty()) return invalid_argument(o_.viewer->script->path + ": click: " + click_error_);
+    }
   }
   if (state_->quit_requested()) glfwSetWindowShouldClose(window_, GLFW_TRUE);
   glfwSetWindowTitle(window_, viewer_window_title(setup.dataset, frame_ms_).c_str());
@@ -564,6 +602,23 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   in.frame_ms = frame_ms_;
   in.histograms = setup.histograms;
   draw_viewer_panels(*state_, in);
+  if (tools_ && state_->ui_visible()) {
+    draw_tools_panel(*tools_, *panel_);
+    if (panel_->restore) restore_card(*panel_->restore);
+    // The card takes this frame's picture: read back with the frame, stored in end_frame.
+    if (panel_->save_card) {
+      if (screenshot_pending_.empty()) {
+        auto temp = TempFile::create_beside(o_.viewer->store->path() + "/card-snapshot.png");
+        if (!temp) {
+          panel_->message = temp.status().message();
+        } else {
+          card_temp_ = std::make_unique<TempFile>(std::move(temp).value());
+          screenshot_pending_ = card_temp_->path();
+        }
+      }
+      if (!screenshot_pending_.empty()) card_shot_ = screenshot_pending_;
+    }
+  }
   // The camera after this frame's edits (panels, keys, script), so a change shows in the frame that made it.
   const Pose head = pose_for_camera(viewer_world_camera(*state_, setup.placement), setup.transform);
   const ViewSpec mono{head, fov, o_.width, o_.height};
@@ -587,32 +642,20 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
 }
 
 void DesktopTarget::draw_annotation_overlay(const ViewSpec& view) {
-  annotate::AnnotationStore* store = o_.viewer->store.get();
-  if (!store) return;
-  const uint64_t revision = script_ ? script_->annotation_revision() : 0;
-  if (revision != overlay_revision_) {
-    overlay_revision_ = revision;
+  if (!tools_) return;
+  annotate::AnnotationStore* store = &tools_->store();
+  if (tools_->revision() != overlay_revision_) {
+    overlay_revision_ = tools_->revision();
     overlay_points_.clear();
     overlay_lines_.clear();
-    overlay_summary_.clear();
     auto markers = store->markers();
     auto measurements = store->measurements();
     if (!markers || !measurements) {
       log_warn("viewer: " + store->path() + ": " + (!markers ? markers.status() : measurements.status()).message());
     } else {
-      std::map<std::string, size_t> counts;
-      for (const annotate::Marker& m : *markers) {
-        overlay_points_.push_back({m.pos, m.color});
-        ++counts[m.cls];
-      }
-      for (const auto& [cls, n] : counts) overlay_summary_ += cls + ": " + std::to_string(n) + " marker(s)\n";
-      char line[96];
-      for (const annotate::Measurement& m : *measurements) {
+      for (const annotate::Marker& m : *markers) overlay_points_.push_back({m.pos, m.color});
+      for (const annotate::Measurement& m : *measurements)
         overlay_lines_.push_back({OverlayPoint{m.a, {1, 1, 1, 1}}, OverlayPoint{m.b, {1, 1, 1, 1}}});
-        std::snprintf(line, sizeof line, "measurement %llu: %.3f %s\n", static_cast<unsigned long long>(m.id),
-                      store->length(m), store->voxel_space().unit.c_str());
-        overlay_summary_ += line;
-      }
     }
   }
   const VolumePlacement& placement = o_.viewer->placement;
@@ -637,7 +680,10 @@ void DesktopTarget::draw_annotation_overlay(const ViewSpec& view) {
   };
   ImDrawList* draw = ImGui::GetBackgroundDrawList();
   const float radius = std::max(6.0f, float(view.height) / 60.0f);
-  for (const auto& [a, b] : overlay_lines_) {
+  std::vector<std::array<OverlayPoint, 2>> lines = overlay_lines_;
+  if (const auto& drawing = tools_->palette().live().measuring)  // the one being drawn, in grey
+    lines.push_back({OverlayPoint{drawing->a, {0.7, 0.7, 0.7, 1}}, OverlayPoint{drawing->b, {0.7, 0.7, 0.7, 1}}});
+  for (const auto& [a, b] : lines) {
     ImVec2 pa, pb;
     if (project(a.voxel, &pa) && project(b.voxel, &pb)) {
       draw->AddLine(pa, pb, colour(a.color), 2.0f);
@@ -651,12 +697,85 @@ void DesktopTarget::draw_annotation_overlay(const ViewSpec& view) {
     draw->AddCircleFilled(at, radius, colour(p.color));
     draw->AddCircle(at, radius + 1.0f, IM_COL32(0, 0, 0, 255), 0, 2.0f);  // readable on bright data too
   }
-  if (state_->ui_visible() && !overlay_summary_.empty()) {
-    ImGui::SetNextWindowPos(ImVec2(float(view.width) - 250.0f, 10.0f), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(240.0f, 0.0f), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Annotations")) ImGui::TextUnformatted(overlay_summary_.c_str());
-    ImGui::End();
+}
+
+std::array<double, 3> DesktopTarget::voxel_under(double x, double y) const {
+  const VolumePlacement& placement = o_.viewer->placement;
+  const CameraState c = viewer_world_camera(*state_, placement);
+  const glm::dvec3 eye = vec(c.eye), focus = vec(c.target), forward = glm::normalize(focus - eye);
+  const glm::dvec3 right = glm::normalize(glm::cross(forward, vec(c.up))), up = glm::cross(right, forward);
+  const double ty = std::tan(c.fov_y_deg * 3.14159265358979323846 / 360.0);
+  const double tx = ty * double(o_.width) / double(o_.height);
+  const double nx = 2.0 * x / double(o_.width) - 1.0, ny = 1.0 - 2.0 * y / double(o_.height);
+  const glm::dvec3 dir = forward + nx * tx * right + ny * ty * up;
+  const glm::dvec3 w = eye + dir * (glm::dot(focus - eye, forward) / glm::dot(dir, forward));
+  std::array<double, 3> voxel;
+  for (int i = 0; i < 3; ++i) voxel[i] = w[i] / placement.voxel_size[i] + 0.5 * placement.dims[i];
+  return voxel;
+}
+
+void DesktopTarget::on_viewer_click(double x, double y) {
+  click_error_.clear();
+  if (!tools_ || panel_->mode == ToolPanel::Mode::kNavigate) return;
+  if (o_.stereo) {
+    panel_->message = "the tools place in the mono window only";
+    return;
   }
+  const std::array<double, 3> v = voxel_under(x, y);
+  const uint32_t t = state_->scene().timepoint;
+  const Status s = panel_->mode == ToolPanel::Mode::kCount ? tools_->count({v[0], v[1], v[2]}, panel_->cls, t)
+                                                             : tools_->measure_click({v[0], v[1], v[2]}, t);
+  panel_->message = s ? tools_->palette().live().last_edit : s.message();
+  if (!s) click_error_ = s.message();
+}
+
+Scene DesktopTarget::card_scene() const {
+  Scene scene = state_->scene();
+  scene.camera = viewer_world_camera(*state_, o_.viewer->placement);
+  scene.has_camera = true;
+  scene.viewport = {o_.width, o_.height};
+  return scene;
+}
+
+Status DesktopTarget::save_panel_card(const std::string& png_path) {
+  std::ifstream in(png_path, std::ios::binary);
+  std::vector<uint8_t> png((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in.good() && !in.eof()) return io_error(png_path + ": cannot read the card's picture back");
+  VXR_ASSIGN_OR_RETURN(annotate::Id id, tools_->card(card_scene(), panel_->card_title, panel_->card_note, std::move(png)));
+  panel_->message = "card " + std::to_string(id) + " saved";
+  panel_->card_title[0] = panel_->card_note[0] = '\0';
+  return Status::ok();
+}
+
+// Shows a card's scene: its settings and timepoint, and the orbit that sees its camera.
+void DesktopTarget::restore_card(uint64_t id) {
+  auto card = tools_->store().card(id, false);
+  if (!card) {
+    panel_->message = card.status().message();
+    return;
+  }
+  auto scene = scene_from_json(card->scene_json);
+  if (!scene) {
+    panel_->message = "card " + std::to_string(id) + ": " + scene.status().message();
+    return;
+  }
+  OrbitCamera orbit = state_->orbit();
+  if (scene->has_camera) {
+    // The card's camera is in world units; the orbit in units of the volume's longest side.
+    const glm::dvec3 e = o_.viewer->placement.extent();
+    const double longest = std::max({e.x, e.y, e.z});
+    const glm::dvec3 eye = vec(scene->camera.eye) / longest, focus = vec(scene->camera.target) / longest;
+    const glm::dvec3 back = eye - focus;
+    orbit.distance = glm::length(back);
+    orbit.focus = {focus.x, focus.y, focus.z};
+    if (orbit.distance > 0) {
+      orbit.pitch = std::asin(std::clamp(back.y / orbit.distance, -1.0, 1.0));
+      orbit.yaw = std::atan2(back.x, back.z);
+    }
+    orbit.fov_y_deg = scene->camera.fov_y_deg;
+  }
+  const Status s = state_->restore(scene->render, scene->timepoint, orbit);
+  panel_->message = s ? "card " + std::to_string(id) + " shown" : "card " + std::to_string(id) + ": " + s.message();
 }
 
 Status DesktopTarget::record_after_views(VkCommandBuffer cmd, FrameSubmit& submit) {
@@ -739,7 +858,7 @@ Status DesktopTarget::write_screenshot() {
     o[3] = 255;  // the window is opaque
   }
   VXR_RETURN_IF_ERROR(write_png(path, img));
-  if (script_) script_->screenshot_written(path);
+  if (script_ && !(card_temp_ && path == card_temp_->path())) script_->screenshot_written(path);
   log_info("viewer: screenshot " + path);
   return Status::ok();
 }

@@ -21,7 +21,9 @@
 #include <string>
 #include <vector>
 
+#include "core/output_file.h"
 #include "gpu/resources.h"
+#include "scene/render_settings.h"
 #include "xr/frame_target.h"
 
 struct GLFWwindow;
@@ -32,6 +34,8 @@ struct ViewerSetup;  // xr/desktop/viewer_setup.h
 class ViewerState;
 class ImGuiLayer;
 class UiScriptRunner;
+class ViewerTools;
+struct ToolPanel;
 
 // A marker or measurement end in voxels, with its colour (the overlay draws it).
 struct OverlayPoint {
@@ -98,6 +102,13 @@ class DesktopTarget : public FrameTarget {
   void draw_annotation_overlay(const ViewSpec& view);
   Status write_screenshot();
   void on_viewer_cursor(double dx, double dy);
+  // A left click at window pixel (x, y): the tools panel's tool places there.
+  void on_viewer_click(double x, double y);
+  // The voxel under window pixel (x, y) on the plane through the orbit centre facing the camera.
+  std::array<double, 3> voxel_under(double x, double y) const;
+  Scene card_scene() const;
+  Status save_panel_card(const std::string& png_path);
+  void restore_card(uint64_t id);
 
   DesktopOptions o_;
   GLFWwindow* window_ = nullptr;
@@ -140,7 +151,13 @@ class DesktopTarget : public FrameTarget {
   uint64_t overlay_revision_ = UINT64_MAX;
   std::vector<OverlayPoint> overlay_points_;
   std::vector<std::array<OverlayPoint, 2>> overlay_lines_;
-  std::string overlay_summary_;
+  std::unique_ptr<ViewerTools> tools_;  // with a store
+  std::unique_ptr<ToolPanel> panel_;
+  double press_x_ = 0, press_y_ = 0;
+  bool press_on_ui_ = false;
+  std::string card_shot_;  // the panel asked for a card: this frame's picture goes here first
+  std::unique_ptr<TempFile> card_temp_;  // that picture when no script screenshot was due
+  std::string click_error_;              // the last click's refusal (a script stops on it)
 };
 
 }  // namespace vxr::xr

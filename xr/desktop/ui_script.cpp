@@ -48,6 +48,17 @@ Result<UiStep> parse_step(const std::string& text) {
         step.xyz[0] != std::floor(step.xyz[0]) || step.xyz[1] != std::floor(step.xyz[1]))
       return invalid_argument("usage: resize WIDTH HEIGHT (64..8192 pixels)");
     step.kind = UiStepKind::kResize;
+  } else if (cmd == "tool") {
+    if (!((w.size() == 2 && (w[1] == "navigate" || w[1] == "count" || w[1] == "measure")) ||
+          (w.size() == 3 && w[1] == "count")))
+      return invalid_argument("usage: tool navigate|count [CLASS]|measure");
+    step.kind = UiStepKind::kTool;
+    step.arg = w[1] + (w.size() == 3 ? " " + w[2] : w[1] == "count" ? " default" : "");
+  } else if (cmd == "click") {
+    if (w.size() != 3 || !parse_number(w[1], &step.xyz[0]) || !parse_number(w[2], &step.xyz[1]) || step.xyz[0] < 0 ||
+        step.xyz[1] < 0)
+      return invalid_argument("usage: click X Y (window pixels)");
+    step.kind = UiStepKind::kClick;
   } else if (cmd == "screenshot") {
     if (w.size() != 2) return invalid_argument("usage: screenshot PATH (no spaces)");
     step.kind = UiStepKind::kScreenshot;
@@ -69,13 +80,6 @@ Result<UiStep> parse_step(const std::string& text) {
     step.kind = UiStepKind::kViewer;
   }
   return step;
-}
-
-// Distinct colours for count classes, in the order they first appear.
-std::array<double, 4> class_colour(size_t index) {
-  static const std::array<double, 4> table[] = {
-      {1, 1, 0, 1}, {0, 1, 1, 1}, {1, 0, 1, 1}, {0, 1, 0, 1}, {1, 0.5, 0, 1}, {0.5, 0.5, 1, 1}};
-  return table[index % std::size(table)];
 }
 
 }  // namespace
@@ -126,6 +130,8 @@ Result<UiScript> load_ui_script(const std::string& path, const ViewerState& stat
       case UiStepKind::kCount:
       case UiStepKind::kMeasure:
       case UiStepKind::kCard:
+      case UiStepKind::kTool:
+      case UiStepKind::kClick:
         if (!have_store) return script.step_error(i, "needs an annotation store (--annotations STORE)");
         break;
       case UiStepKind::kUi:
@@ -136,11 +142,9 @@ Result<UiScript> load_ui_script(const std::string& path, const ViewerState& stat
   return script;
 }
 
-UiScriptRunner::UiScriptRunner(UiScript script, annotate::AnnotationStore* store,
+UiScriptRunner::UiScriptRunner(UiScript script, ViewerTools* tools,
                                std::function<Scene(const ViewerState&)> card_scene)
-    : script_(std::move(script)), store_(store), card_scene_(std::move(card_scene)) {
-  if (store_) palette_.emplace(*store_);
-}
+    : script_(std::move(script)), tools_(tools), card_scene_(std::move(card_scene)) {}
 
 Result<UiScriptRunner::FrameWork> UiScriptRunner::before_frame(ViewerState& state) {
   FrameWork work;
@@ -164,6 +168,15 @@ Result<UiScriptRunner::FrameWork> UiScriptRunner::before_frame(ViewerState& stat
       work.resize = {int(step.xyz[0]), int(step.xyz[1])};
       return work;
     }
+    if (step.kind == UiStepKind::kTool) {
+      work.tool = step.arg;
+      continue;
+    }
+    // One click a frame, seen through that frame's camera.
+    if (step.kind == UiStepKind::kClick) {
+      work.click = std::array<double, 2>{step.xyz[0], step.xyz[1]};
+      return work;
+    }
     if (Status s = run_step(step, state); !s) return script_.step_error(index, s.message());
   }
   work.done = true;
@@ -171,53 +184,32 @@ Result<UiScriptRunner::FrameWork> UiScriptRunner::before_frame(ViewerState& stat
 }
 
 Status UiScriptRunner::run_step(const UiStep& step, ViewerState& state) {
-  using annotate::ToolAction;
+  const bool needs_store = step.kind == UiStepKind::kCount || step.kind == UiStepKind::kMeasure ||
+                           step.kind == UiStepKind::kCard;
+  if (needs_store && !tools_) return internal_error("no annotation store");
+  const uint32_t t = state.scene().timepoint;
   switch (step.kind) {
     case UiStepKind::kViewer: return state.apply_command(step.text);
     case UiStepKind::kUi:
       if (state.ui_visible() != step.on) state.handle_key(ViewerKey::kToggleUi);
       return Status::ok();
-    case UiStepKind::kCount: {
-      if (!palette_) return internal_error("no annotation store");
-      size_t index = 0;
-      for (; index < classes_.size() && classes_[index] != step.arg; ++index) {
-      }
-      if (index == classes_.size()) classes_.push_back(step.arg);
-      palette_->select_tool(annotate::Tool::kCount);
-      palette_->set_class(step.arg, class_colour(index));
-      VXR_RETURN_IF_ERROR(palette_->apply({ToolAction::kPress, {step.xyz[0], step.xyz[1], step.xyz[2]},
-                                           state.scene().timepoint}));
-      ++annotation_revision_;
-      return Status::ok();
-    }
-    case UiStepKind::kMeasure: {
-      if (!palette_) return internal_error("no annotation store");
-      const uint32_t t = state.scene().timepoint;
-      palette_->select_tool(annotate::Tool::kMeasure);
-      VXR_RETURN_IF_ERROR(palette_->apply({ToolAction::kPress, {step.xyz[0], step.xyz[1], step.xyz[2]}, t}));
-      VXR_RETURN_IF_ERROR(palette_->apply({ToolAction::kMove, {step.xyz[3], step.xyz[4], step.xyz[5]}, t}));
-      VXR_RETURN_IF_ERROR(palette_->apply({ToolAction::kRelease, {step.xyz[3], step.xyz[4], step.xyz[5]}, t}));
-      ++annotation_revision_;
-      return Status::ok();
-    }
+    case UiStepKind::kCount: return tools_->count({step.xyz[0], step.xyz[1], step.xyz[2]}, step.arg, t);
+    case UiStepKind::kMeasure:
+      return tools_->measure({step.xyz[0], step.xyz[1], step.xyz[2]}, {step.xyz[3], step.xyz[4], step.xyz[5]}, t);
     case UiStepKind::kCard: {
-      if (!store_) return internal_error("no annotation store");
-      annotate::Card card;
-      card.title = step.arg;
-      card.scene_json = scene_to_json(card_scene_(state));
+      std::vector<uint8_t> png;
       if (!last_screenshot_.empty()) {
         std::ifstream in(last_screenshot_, std::ios::binary);
-        card.snapshot_png.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        png.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
         if (!in.good() && !in.eof()) return io_error(last_screenshot_ + ": cannot read the screenshot back");
       }
-      VXR_ASSIGN_OR_RETURN(annotate::Id id, store_->add_card(std::move(card)));
-      (void)id;
-      ++annotation_revision_;
-      return Status::ok();
+      return tools_->card(card_scene_(state), step.arg, "", std::move(png)).status();
     }
     case UiStepKind::kScreenshot:
     case UiStepKind::kWait:
-    case UiStepKind::kResize: break;
+    case UiStepKind::kResize:
+    case UiStepKind::kTool:
+    case UiStepKind::kClick: break;
   }
   return Status::ok();
 }

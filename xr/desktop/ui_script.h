@@ -12,6 +12,9 @@
 //   count X Y Z [CLASS]       a count marker at voxel (X, Y, Z)      } through the ToolPalette,
 //   measure X Y Z X2 Y2 Z2    a measurement between two voxels       } into --annotations STORE
 //   card TITLE...             a card: the current scene + the last screenshot
+//   tool navigate|count [CLASS]|measure   the tools panel's tool (as if picked there)
+//   click X Y                 a left click at window pixel (X, Y), as the mouse would
+//                             (count: a marker; measure: an end point)
 //
 // The whole script is checked before the window opens: a bad step is one line
 // naming the file, the step number and the problem.
@@ -23,19 +26,19 @@
 #include <string>
 #include <vector>
 
-#include "annotate/tools.h"
 #include "core/status.h"
 #include "xr/desktop/viewer_state.h"
+#include "xr/desktop/viewer_tools.h"
 
 namespace vxr::xr {
 
-enum class UiStepKind { kViewer, kUi, kWait, kResize, kScreenshot, kCount, kMeasure, kCard };
+enum class UiStepKind { kViewer, kUi, kWait, kResize, kScreenshot, kCount, kMeasure, kCard, kTool, kClick };
 
 struct UiStep {
   UiStepKind kind = UiStepKind::kViewer;
   std::string text;                 // as written (viewer commands are applied from it)
-  std::string arg;                  // screenshot path, count class, card title
-  std::array<double, 6> xyz{};      // count: 3, measure: 6 voxel coordinates; resize: width, height
+  std::string arg;                  // screenshot path, count class, card title, tool ("count CLASS")
+  std::array<double, 6> xyz{};      // count: 3, measure: 6 voxel coordinates; resize, click: x, y
   uint64_t frames = 0;              // wait
   bool on = true;                   // ui
 };
@@ -56,37 +59,33 @@ Result<UiScript> load_ui_script(const std::string& path, const ViewerState& stat
 // Runs a script one frame at a time over the viewer's state and the store.
 class UiScriptRunner {
  public:
-  // `card_scene`: the Scene a card stores for the viewer's current state
-  // (the window knows the volume's size and its own).
-  UiScriptRunner(UiScript script, annotate::AnnotationStore* store,
-                 std::function<Scene(const ViewerState&)> card_scene);
+  // `tools`: the store's tools (null without a store); `card_scene`: the
+  // Scene a card stores for the viewer's current state (the window knows the
+  // volume's size and its own).
+  UiScriptRunner(UiScript script, ViewerTools* tools, std::function<Scene(const ViewerState&)> card_scene);
 
   // What the frame about to be drawn must do besides drawing.
   struct FrameWork {
-    std::string screenshot;  // read this frame back into this PNG
+    std::string screenshot;           // read this frame back into this PNG
     std::array<int, 2> resize{0, 0};  // > 0: resize the window to this
-    bool done = false;       // every step ran: close the window
+    bool done = false;                // every step ran: close the window
+    std::string tool;                 // non-empty: the tools panel switches to it ("navigate", "count CLASS", "measure")
+    std::optional<std::array<double, 2>> click;  // a left click at this window pixel (as the mouse would)
   };
   // Applies the steps due before this frame (state edits, tool events).
   Result<FrameWork> before_frame(ViewerState& state);
   // After the frame's screenshot was written (cards take the latest).
   void screenshot_written(const std::string& path) { last_screenshot_ = path; }
-  // Annotation edits so far (the window redraws its marker overlay when it changes).
-  uint64_t annotation_revision() const { return annotation_revision_; }
-  annotate::AnnotationStore* store() const { return store_; }
 
  private:
   Status run_step(const UiStep& step, ViewerState& state);
 
   UiScript script_;
-  annotate::AnnotationStore* store_;
+  ViewerTools* tools_;
   std::function<Scene(const ViewerState&)> card_scene_;
-  std::optional<annotate::ToolPalette> palette_;
   size_t next_ = 0;
   uint64_t wait_ = 0;
   std::string last_screenshot_;
-  std::vector<std::string> classes_;  // count classes in order of first use (their colours)
-  uint64_t annotation_revision_ = 0;
 };
 
 }  // namespace vxr::xr

@@ -62,7 +62,71 @@ void render_panel(ViewerState& state) {
   }
 }
 
+void read_store(ViewerTools& tools, ToolPanel& panel) {
+  if (panel.read_revision == tools.revision()) return;
+  panel.read_revision = tools.revision();
+  annotate::AnnotationStore& store = tools.store();
+  auto counts = store.counts();
+  auto measurements = store.measurements();
+  auto cards = store.cards();
+  if (!counts || !measurements || !cards) {
+    panel.message = store.path() + ": " + (!counts ? counts.status() : !measurements ? measurements.status()
+                                                                                      : cards.status())
+                                              .message();
+    return;
+  }
+  panel.counts = *counts;
+  panel.lengths.clear();
+  for (const annotate::Measurement& m : *measurements)
+    panel.lengths.emplace_back(m.label.empty() ? "#" + std::to_string(m.id) : m.label, store.length(m));
+  panel.cards = *cards;
+}
+
 }  // namespace
+
+void draw_tools_panel(ViewerTools& tools, ToolPanel& panel) {
+  read_store(tools, panel);
+  panel.save_card = false;
+  panel.restore.reset();
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos(ImVec2(size.x - 10, 10), ImGuiCond_FirstUseEver, ImVec2(1, 0));
+  ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);  // a title bar until the user opens it
+  if (ImGui::Begin("Tools and cards")) {
+    int mode = static_cast<int>(panel.mode);
+    ImGui::RadioButton("navigate", &mode, 0);
+    ImGui::SameLine();
+    ImGui::RadioButton("count", &mode, 1);
+    ImGui::SameLine();
+    ImGui::RadioButton("measure", &mode, 2);
+    if (mode != static_cast<int>(panel.mode)) {
+      tools.cancel();
+      panel.mode = static_cast<ToolPanel::Mode>(mode);
+    }
+    if (panel.mode == ToolPanel::Mode::kCount) ImGui::InputText("class", panel.cls, sizeof panel.cls);
+    if (panel.mode != ToolPanel::Mode::kNavigate)
+      ImGui::TextDisabled("click the volume (on the plane through the orbit centre)");
+    const annotate::ToolLiveState& live = tools.palette().live();
+    if (live.measuring)
+      ImGui::Text("measuring: %.3f %s", live.measuring_length, tools.store().voxel_space().unit.c_str());
+    for (const auto& [cls, n] : panel.counts) ImGui::BulletText("%s: %zu marker(s)", cls.c_str(), n);
+    for (const auto& [label, length] : panel.lengths)
+      ImGui::BulletText("measurement %s: %.3f %s", label.c_str(), length, tools.store().voxel_space().unit.c_str());
+    ImGui::Separator();
+    ImGui::InputText("title", panel.card_title, sizeof panel.card_title);
+    ImGui::InputTextMultiline("note", panel.card_note, sizeof panel.card_note, ImVec2(0, 48));
+    if (ImGui::Button("save card")) panel.save_card = true;
+    for (const annotate::Card& c : panel.cards) {
+      ImGui::PushID(static_cast<int>(c.id));
+      if (ImGui::SmallButton("restore")) panel.restore = c.id;
+      ImGui::SameLine();
+      ImGui::TextUnformatted(c.title.empty() ? "(untitled)" : c.title.c_str());
+      ImGui::PopID();
+    }
+    if (!panel.message.empty()) ImGui::TextWrapped("%s", panel.message.c_str());
+  }
+  ImGui::End();
+}
 
 std::string viewer_window_title(const std::string& dataset, double frame_ms) {
   char ms[32];

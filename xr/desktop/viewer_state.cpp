@@ -230,6 +230,23 @@ Status ViewerState::axis_view(int axis) {
   return Status::ok();
 }
 
+Status ViewerState::restore(const RenderSettings& render, uint32_t timepoint, const OrbitCamera& orbit) {
+  if (render.channels.size() != scene_.render.channels.size())
+    return invalid_argument("the card draws " + std::to_string(render.channels.size()) + " channel(s), this view " +
+                            std::to_string(scene_.render.channels.size()));
+  if (timepoint >= timepoints_)
+    return out_of_range("the card's timepoint " + std::to_string(timepoint) + " does not exist (" +
+                        std::to_string(timepoints_) + " timepoints)");
+  if (!(orbit.distance > 0) || !std::isfinite(orbit.yaw) || !std::isfinite(orbit.pitch))
+    return invalid_argument("the card's camera cannot be shown as an orbit");
+  scene_.render = render;
+  scene_.timepoint = timepoint;
+  orbit_ = orbit;
+  orbit_.pitch = std::clamp(orbit_.pitch, -kMaxPitch, kMaxPitch);
+  changed();
+  return Status::ok();
+}
+
 void ViewerState::handle_key(ViewerKey key) {
   switch (key) {
     case ViewerKey::kResetView: reset_view(); break;

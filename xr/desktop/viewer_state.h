@@ -75,6 +75,10 @@ class ViewerState {
   Status axis_view(int axis);
   CameraState camera() const { return orbit_.camera(); }
 
+  // Back to what a card saved: its settings (same channel count), timepoint
+  // and the orbit that shows its camera. Nothing changes when it is refused.
+  Status restore(const RenderSettings& render, uint32_t timepoint, const OrbitCamera& orbit);
+
   // Keys edit the state; quit and the help/UI toggles are only recorded here
   // (the window acts on them).
   void handle_key(ViewerKey key);
