@@ -46,6 +46,27 @@ Result<Buffer> create_buffer(const Context& ctx, const BufferCreateInfo& info) {
   return b;
 }
 
+bool host_mapped_image_supported(const Context& ctx, VkImageType type, VkFormat format, VkImageUsageFlags usage,
+                                 VkExtent3D extent) {
+  const VkPhysicalDeviceType t = ctx.info().type;
+  if (t != VK_PHYSICAL_DEVICE_TYPE_CPU && t != VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU) return false;
+  VkImageFormatProperties props{};
+  if (vkGetPhysicalDeviceImageFormatProperties(ctx.physical_device(), format, type, VK_IMAGE_TILING_LINEAR, usage, 0,
+                                               &props) != VK_SUCCESS)
+    return false;
+  if (extent.width > props.maxExtent.width || extent.height > props.maxExtent.height ||
+      extent.depth > props.maxExtent.depth)
+    return false;
+  VkFormatProperties fp{};
+  vkGetPhysicalDeviceFormatProperties(ctx.physical_device(), format, &fp);
+  const VkFormatFeatureFlags need = VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
+  if ((fp.linearTilingFeatures & need) != need) return false;
+  // Memory that is both the device's and the host's.
+  return ctx.find_memory_type(~0u, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
+                                       VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
+      .is_ok();
+}
+
 uint32_t format_texel_bytes(VkFormat format) {
   switch (format) {
     case VK_FORMAT_R8_UNORM:
@@ -87,10 +108,11 @@ Result<Image> create_image(const Context& ctx, const ImageCreateInfo& info) {
   ici.mipLevels = 1;
   ici.arrayLayers = 1;
   ici.samples = VK_SAMPLE_COUNT_1_BIT;
-  ici.tiling = VK_IMAGE_TILING_OPTIMAL;
+  ici.tiling = info.host_mapped ? VK_IMAGE_TILING_LINEAR : VK_IMAGE_TILING_OPTIMAL;
   ici.usage = info.usage;
   ici.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  ici.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  // PREINITIALIZED: what the host writes before the first transition is kept.
+  ici.initialLayout = info.host_mapped ? VK_IMAGE_LAYOUT_PREINITIALIZED : VK_IMAGE_LAYOUT_UNDEFINED;
   VkImage raw = VK_NULL_HANDLE;
   VXR_VK_TRY(vkCreateImage(dev, &ici, nullptr, &raw));
   Image img;
@@ -98,13 +120,17 @@ Result<Image> create_image(const Context& ctx, const ImageCreateInfo& info) {
   img.format = info.format;
   img.extent = ici.extent;
   img.type = info.type;
+  img.layout = ici.initialLayout;
 
   VkMemoryRequirements req;
   vkGetImageMemoryRequirements(dev, raw, &req);
   if (req.size > lim.maxStorageBufferRange && req.size > (VkDeviceSize(2) << 30))
     return out_of_range(std::string(info.debug_name) + ": image needs " + std::to_string(req.size) +
                         " bytes, more than one allocation may hold");
-  VXR_ASSIGN_OR_RETURN(uint32_t type, ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT));
+  const VkMemoryPropertyFlags required =
+      info.host_mapped ? VkMemoryPropertyFlags(VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
+                       : VkMemoryPropertyFlags(VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  VXR_ASSIGN_OR_RETURN(uint32_t type, ctx.find_memory_type(req.memoryTypeBits, required, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT));
   VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   mai.allocationSize = req.size;
   mai.memoryTypeIndex = type;
@@ -112,6 +138,16 @@ Result<Image> create_image(const Context& ctx, const ImageCreateInfo& info) {
   VXR_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, &mem));
   img.memory = Handle<VkDeviceMemory>(dev, mem);
   VXR_VK_TRY(vkBindImageMemory(dev, raw, mem, 0));
+  if (info.host_mapped) {
+    void* base = nullptr;
+    VXR_VK_TRY(vkMapMemory(dev, mem, 0, VK_WHOLE_SIZE, 0, &base));  // unmapped when the memory is freed
+    const VkImageSubresource sub{VK_IMAGE_ASPECT_COLOR_BIT, 0, 0};
+    VkSubresourceLayout layout{};
+    vkGetImageSubresourceLayout(dev, raw, &sub, &layout);
+    img.mapped = static_cast<uint8_t*>(base) + layout.offset;
+    img.row_pitch = layout.rowPitch;
+    img.depth_pitch = info.type == VK_IMAGE_TYPE_3D ? layout.depthPitch : layout.size;
+  }
 
   const bool depth = info.format == VK_FORMAT_D32_SFLOAT;
   VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};

@@ -42,6 +42,10 @@ struct ImageCreateInfo {
   VkExtent3D extent{1, 1, 1};
   VkImageUsageFlags usage = 0;
   const char* debug_name = "image";
+  // Linear tiling in host-visible memory, mapped for the image's life, so the
+  // host writes texels in place (no staging copy). Only where
+  // host_mapped_image_supported() says so.
+  bool host_mapped = false;
 };
 
 // A device-local image with a view over all of it. `layout` tracks the layout
@@ -54,7 +58,16 @@ struct Image {
   VkExtent3D extent{0, 0, 0};
   VkImageType type = VK_IMAGE_TYPE_2D;
   VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;
+  // Host-mapped images only: texel (x, y, z) is at mapped + z * depth_pitch + y * row_pitch + x * texel bytes.
+  uint8_t* mapped = nullptr;
+  VkDeviceSize row_pitch = 0, depth_pitch = 0;
 };
+
+// Whether create_image can make a host-mapped image of this kind: a device
+// whose memory is the host's (a CPU or integrated device, where linear
+// textures sample as fast as optimal ones) that allows linear tiling for it.
+bool host_mapped_image_supported(const Context& ctx, VkImageType type, VkFormat format, VkImageUsageFlags usage,
+                                 VkExtent3D extent);
 
 // Checks the extent against the device's limits first: lavapipe does not
 // refuse oversize images, it misbehaves later.

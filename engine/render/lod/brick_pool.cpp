@@ -227,18 +227,35 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   const uint64_t ext[3] = {uint64_t(slots.x) * p->edge_, uint64_t(slots.y) * p->edge_, uint64_t(slots.z) * p->edge_};
   // The ring must hold at least one brick, however wide the container's chunks are.
   const uint64_t staging_bytes = std::max(options.staging_bytes, p->brick_bytes_);
+  const VkExtent3D extent{uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])};
+  const VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  p->direct_ = options.direct_writes && gpu::host_mapped_image_supported(ctx, VK_IMAGE_TYPE_3D, format, usage, extent);
   for (uint32_t c = 0; c < nch; ++c) {
-    VXR_ASSIGN_OR_RETURN(gpu::Image atlas,
-                         gpu::create_image(ctx, {VK_IMAGE_TYPE_3D, format,
-                                                 {uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])},
-                                                 VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                                 "brick atlas"}));
+    gpu::ImageCreateInfo ii{VK_IMAGE_TYPE_3D, format, extent, usage, "brick atlas"};
+    ii.host_mapped = p->direct_;
+    VXR_ASSIGN_OR_RETURN(gpu::Image atlas, gpu::create_image(ctx, ii));
     p->atlases_.push_back(std::move(atlas));
   }
-  VXR_ASSIGN_OR_RETURN(p->staging_, gpu::create_buffer(ctx, {staging_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                                             gpu::MemoryIntent::kUpload, "brick staging ring"}));
+  if (p->direct_) {
+    // Zeroed by the host (never-written texels are defined), then GENERAL for good.
+    for (gpu::Image& atlas : p->atlases_)
+      for (uint32_t z = 0; z < extent.depth; ++z)
+        for (uint32_t y = 0; y < extent.height; ++y)
+          std::memset(atlas.mapped + z * atlas.depth_pitch + y * atlas.row_pitch, 0,
+                      size_t(extent.width) * p->texel_bytes_);
+    VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+      for (gpu::Image& atlas : p->atlases_)
+        gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_HOST_BIT,
+                              VK_ACCESS_2_HOST_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                              VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    }));
+    p->scratch_.resize(p->brick_bytes_);
+  } else {
+    VXR_ASSIGN_OR_RETURN(p->staging_, gpu::create_buffer(ctx, {staging_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                                               gpu::MemoryIntent::kUpload, "brick staging ring"}));
+  }
   // Clear once so never-written texels are defined (validation and determinism).
-  VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+  if (!p->direct_) VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
     for (gpu::Image& atlas : p->atlases_) {
       gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
                             VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
@@ -291,20 +308,33 @@ void BrickPool::slot_chunks(ChunkKey brick, std::vector<ChunkKey>& out) const {
   }
 }
 
+Result<std::shared_ptr<const Chunk>> BrickPool::checked_chunk(const ChunkKey& k, const ReadChunk& fetch) const {
+  VXR_ASSIGN_OR_RETURN(auto chunk, fetch(k));
+  if (!chunk) return chunk;  // not loaded yet (streaming)
+  const DType dtype = src_.info().dtype;
+  const uint32_t e = src_.chunk_size() + 2 * src_.apron();
+  if (chunk->edge != e || chunk->dtype != dtype || chunk->data.size() != uint64_t(e) * e * e * dtype_bytes(dtype))
+    return internal_error("brick pool: chunk level " + std::to_string(k.level) + " has edge " +
+                          std::to_string(chunk->edge) + " and " + std::to_string(chunk->data.size()) +
+                          " bytes, expected edge " + std::to_string(e) + " of " + dtype_name(dtype));
+  return chunk;
+}
+
+Result<const uint8_t*> BrickPool::slot_texels_from(const ChunkKey& key, uint8_t* out, const ReadChunk& fetch,
+                                                   std::shared_ptr<const Chunk>& keep) const {
+  const DType dtype = src_.info().dtype;
+  if (apron_ == src_.apron() && (dtype == DType::kU8 || dtype == DType::kU16)) {
+    VXR_ASSIGN_OR_RETURN(keep, checked_chunk(key, fetch));
+    return keep ? keep->data.data() : nullptr;
+  }
+  VXR_ASSIGN_OR_RETURN(bool filled, fill_slot_from(key, out, fetch));
+  return filled ? out : nullptr;
+}
+
 Result<bool> BrickPool::fill_slot_from(const ChunkKey& key, uint8_t* out, const ReadChunk& fetch) const {
   const DType dtype = src_.info().dtype;
   const uint32_t a = src_.apron(), cs = src_.chunk_size();
-  // nullptr: not loaded yet (streaming); the slot is left unfinished.
-  auto read = [&](const ChunkKey& k) -> Result<std::shared_ptr<const Chunk>> {
-    VXR_ASSIGN_OR_RETURN(auto chunk, fetch(k));
-    if (!chunk) return chunk;
-    const uint32_t e = cs + 2 * a;
-    if (chunk->edge != e || chunk->dtype != dtype || chunk->data.size() != uint64_t(e) * e * e * dtype_bytes(dtype))
-      return internal_error("brick pool: chunk level " + std::to_string(k.level) + " has edge " +
-                            std::to_string(chunk->edge) + " and " + std::to_string(chunk->data.size()) +
-                            " bytes, expected edge " + std::to_string(e) + " of " + dtype_name(dtype));
-    return chunk;
-  };
+  auto read = [&](const ChunkKey& k) { return checked_chunk(k, fetch); };
   if (apron_ == a) {  // the payload is the slot
     VXR_ASSIGN_OR_RETURN(auto chunk, read(key));
     if (!chunk) return false;
@@ -402,16 +432,27 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
     key.channel = 0;
     if (resident(key)) continue;
     const bool over_budget = st.bricks > 0 && st.bytes + brick_bytes_ > budget_bytes;
-    if (over_budget || ring + brick_bytes_ > staging_.size) {
+    if (over_budget || (!direct_ && ring + brick_bytes_ > staging_.size)) {
       ++st.deferred;
       continue;
     }
+    // Each channel's slot texels: in the staging ring, or (direct writes) the
+    // chunk's own bytes where they already are the slot, else the scratch.
+    uint8_t* brick = direct_ ? scratch_.data() : static_cast<uint8_t*>(staging_.mapped) + ring;
+    const uint8_t* texels[VXR_MAX_CHANNELS] = {};
+    std::shared_ptr<const Chunk> keep[VXR_MAX_CHANNELS];
     bool complete = true;
     for (uint32_t c = 0; c < channels() && complete; ++c) {
       ChunkKey ck = key;
       ck.channel = channel_map_[c];
-      VXR_ASSIGN_OR_RETURN(complete,
-                           fill_slot_from(ck, static_cast<uint8_t*>(staging_.mapped) + ring + c * channel_bytes_, fetch));
+      uint8_t* out = brick + c * channel_bytes_;
+      if (direct_) {
+        VXR_ASSIGN_OR_RETURN(texels[c], slot_texels_from(ck, out, fetch, keep[c]));
+        complete = texels[c] != nullptr;
+      } else {
+        VXR_ASSIGN_OR_RETURN(complete, fill_slot_from(ck, out, fetch));
+        texels[c] = out;
+      }
     }
     if (!complete) {  // streaming: a chunk it needs is not decoded yet
       ++st.deferred;
@@ -423,7 +464,7 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
       break;
     }
     const glm::uvec3 o = slot_origin(*slot) - glm::uvec3(apron_);
-    for (uint32_t c = 0; c < channels(); ++c) {
+    for (uint32_t c = 0; c < channels() && !direct_; ++c) {
       VkBufferImageCopy r{};
       r.bufferOffset = ring + c * channel_bytes_;
       r.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
@@ -432,11 +473,12 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
       regions[c].push_back(r);
     }
     const VkFormat format = atlases_[0].format;
-    for (uint32_t c = 0; c < channels(); ++c)
-      compute_cell_ranges(format, static_cast<const uint8_t*>(staging_.mapped) + ring + c * channel_bytes_,
-                          src_.chunk_size(), apron_, cells_,
+    for (uint32_t c = 0; c < channels(); ++c) {
+      compute_cell_ranges(format, texels[c], src_.chunk_size(), apron_, cells_,
                           static_cast<glm::vec2*>(cell_ranges_.mapped) + (size_t(*slot) * channels() + c) * cells_.count());
-    ring += (brick_bytes_ + 15) & ~uint64_t(15);
+      if (direct_) write_slot(c, *slot, texels[c]);
+    }
+    if (!direct_) ring += (brick_bytes_ + 15) & ~uint64_t(15);
     slot_[*slot] = {key, frame_, false, true};
     map_[key] = *slot;
     ++st.bricks;
@@ -445,7 +487,20 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
   return st;
 }
 
+void BrickPool::write_slot(uint32_t c, uint32_t slot, const uint8_t* texels) {
+  // The slot is not drawn this frame (free_slot) and the caller waited for the
+  // frames that drew it, so nothing on the device reads these texels now.
+  const gpu::Image& atlas = atlases_[c];
+  const glm::uvec3 o = slot_origin(slot) - glm::uvec3(apron_);
+  const size_t row = size_t(edge_) * texel_bytes_;
+  for (uint32_t z = 0; z < edge_; ++z)
+    for (uint32_t y = 0; y < edge_; ++y)
+      std::memcpy(atlas.mapped + (o.z + z) * atlas.depth_pitch + (o.y + y) * atlas.row_pitch + size_t(o.x) * texel_bytes_,
+                  texels + (size_t(z) * edge_ + y) * row, row);
+}
+
 void BrickPool::record_copies(VkCommandBuffer cmd, const std::vector<std::vector<VkBufferImageCopy>>& regions) {
+  if (direct_) return;  // written in place by stage()
   for (uint32_t c = 0; c < channels(); ++c) {
     gpu::Image& atlas = atlases_[c];
     gpu::transition_image(cmd, atlas, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
@@ -464,7 +519,7 @@ Result<UploadStats> BrickPool::upload(const std::vector<ChunkKey>& requests, uin
   std::vector<std::vector<VkBufferImageCopy>> regions;
   VXR_ASSIGN_OR_RETURN(UploadStats st,
                        stage(requests, budget_bytes, [this](const ChunkKey& k) { return src_.read(k); }, regions));
-  if (st.bricks == 0) return st;
+  if (st.bricks == 0 || direct_) return st;
   VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) { record_copies(cmd, regions); }));
   return st;
 }

@@ -30,6 +30,11 @@
 //
 // Between uploads the atlases are in SHADER_READ_ONLY_OPTIMAL; an upload
 // moves them to TRANSFER_DST_OPTIMAL and back around its copies.
+//
+// Direct writes: on a device whose memory is the host's (lavapipe, integrated
+// GPUs) the atlases are linear images mapped for their life, kept in GENERAL,
+// and a brick is written straight into its slot: no staging ring, no copy
+// command, no wait. The bytes in the atlas are the same either way.
 #pragma once
 
 #include <functional>
@@ -60,6 +65,9 @@ struct BrickPoolOptions {
   // Source channels to load, in the order the renderer numbers them (at most
   // 4); empty = the source's first min(channels, 4).
   std::vector<uint32_t> channels;
+  // Write bricks straight into host-mapped atlases where the device allows it
+  // (gpu::host_mapped_image_supported); false: always through the staging ring.
+  bool direct_writes = true;
 };
 
 
@@ -153,6 +161,11 @@ class BrickPool {
   uint32_t texel_bytes() const { return texel_bytes_; }
 
   const gpu::Image& atlas(uint32_t channel = 0) const { return atlases_[channel]; }
+  // The layout the atlases are sampled in (GENERAL with direct writes).
+  VkImageLayout atlas_layout() const {
+    return direct_ ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+  }
+  bool writes_direct() const { return direct_; }
   uint32_t channels() const { return static_cast<uint32_t>(atlases_.size()); }
   uint32_t source_channel(uint32_t i) const { return channel_map_[i]; }
   uint32_t apron() const { return apron_; }
@@ -184,6 +197,13 @@ class BrickPool {
   Result<uint32_t> free_slot(UploadStats& stats);
   // A chunk by key; a null chunk: not loaded yet.
   using ReadChunk = std::function<Result<std::shared_ptr<const Chunk>>(const ChunkKey&)>;
+  // A chunk from `fetch`, checked against the source's chunk shape; null: not loaded yet.
+  Result<std::shared_ptr<const Chunk>> checked_chunk(const ChunkKey& key, const ReadChunk& fetch) const;
+  // One channel's slot texels: the chunk's own bytes when they already are the
+  // slot (same apron, u8/u16: `keep` holds the chunk), else filled into `out`.
+  // nullptr when a chunk is not loaded yet.
+  Result<const uint8_t*> slot_texels_from(const ChunkKey& key, uint8_t* out, const ReadChunk& fetch,
+                                          std::shared_ptr<const Chunk>& keep) const;
   // fill_slot with chunks from `fetch`; false when one of them is not loaded yet.
   Result<bool> fill_slot_from(const ChunkKey& key, uint8_t* out, const ReadChunk& fetch) const;
   // Fills requested bricks (every channel) into the staging ring and assigns
@@ -191,6 +211,8 @@ class BrickPool {
   Result<UploadStats> stage(const std::vector<ChunkKey>& requests, uint64_t budget_bytes, const ReadChunk& fetch,
                             std::vector<std::vector<VkBufferImageCopy>>& regions);
   void record_copies(VkCommandBuffer cmd, const std::vector<std::vector<VkBufferImageCopy>>& regions);
+  // Direct writes: one channel's slot texels (edge^3, packed) into its slot of atlas c.
+  void write_slot(uint32_t c, uint32_t slot, const uint8_t* texels);
   glm::uvec3 slot_origin(uint32_t slot) const;
 
   gpu::Context& ctx_;
@@ -202,7 +224,9 @@ class BrickPool {
   uint64_t brick_bytes_ = 0;
   std::vector<gpu::Image> atlases_;
   std::vector<uint32_t> channel_map_;
-  gpu::Buffer staging_;
+  gpu::Buffer staging_;       // staged writes only
+  bool direct_ = false;       // direct writes (see above)
+  std::vector<uint8_t> scratch_;  // direct writes: one brick, every channel, packed
   BrickCells cells_;
   gpu::Buffer cell_ranges_;
   std::vector<Slot> slot_;

@@ -348,7 +348,7 @@ void BrickRenderer::bind_atlases(VkDescriptorSet set, const std::vector<const gp
   // is specialised for the channel count).
   VkDescriptorImageInfo infos[VXR_MAX_CHANNELS];
   for (size_t c = 0; c < VXR_MAX_CHANNELS; ++c)
-    infos[c] = {linear_, atlases[c < atlases.size() ? c : 0]->view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    infos[c] = {linear_, atlases[c < atlases.size() ? c : 0]->view, atlases[c < atlases.size() ? c : 0]->layout};
   VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
   w.dstSet = set;
   w.dstBinding = 0;
