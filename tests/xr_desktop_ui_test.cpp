@@ -176,6 +176,90 @@ TEST_CASE("desktop viewer: a scripted session under Xvfb shows each change in it
   CHECK(card->snapshot_png == marked_bytes);
 }
 
+TEST_CASE("desktop viewer: clicks with the count and measure tools place where the window shows them") {
+  const std::string dir = test::xr_out_dir("desktop_ui_tools");
+  auto shot = [&](const std::string& name) { return dir + "/" + name + ".png"; };
+  const std::string script = dir + "/tools.json";
+  std::ofstream(script) << nlohmann::json::array({
+                               "wait 2",
+                               "ui off",
+                               "screenshot " + shot("before"),
+                               "tool count cells",
+                               "click 330 180",
+                               "tool navigate",
+                               "click 100 100",  // navigating: places nothing
+                               "tool measure",
+                               "click 160 280",
+                               "click 320 280",
+                               "screenshot " + shot("clicked"),
+                           })
+                               .dump(1);
+  const std::string store_dir = dir + "/store";
+  std::filesystem::remove_all(store_dir);
+  const test::ChildResult r = test::run_child(viewer_command(script, "--annotations " + store_dir));
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  auto before = read_png(shot("before"));
+  auto clicked = read_png(shot("clicked"));
+  REQUIRE(before.is_ok());
+  REQUIRE(clicked.is_ok());
+
+  auto store = annotate::AnnotationStore::open(store_dir, false);
+  REQUIRE(store.is_ok());
+  auto markers = (*store)->markers();
+  REQUIRE(markers.is_ok());
+  REQUIRE(markers->size() == 1);
+  const annotate::Marker& m = markers->front();
+  CHECK(m.cls == "cells");
+  MESSAGE("marker at voxel " << m.pos[0] << ", " << m.pos[1] << ", " << m.pos[2]);
+  auto measurements = (*store)->measurements();
+  REQUIRE(measurements.is_ok());
+  REQUIRE(measurements->size() == 1);
+  const annotate::Measurement& d = measurements->front();
+  MESSAGE("measurement " << d.a[0] << "," << d.a[1] << "," << d.a[2] << " -> " << d.b[0] << "," << d.b[1] << ","
+                         << d.b[2]);
+  // Both clicks were on one screen row: the ends differ along one volume axis only ...
+  int moved = 0;
+  for (int i = 0; i < 3; ++i) moved += std::abs(d.b[i] - d.a[i]) > 1.0;
+  CHECK(moved == 1);
+  // ... and the marker, on the same plane through the orbit centre, lies where its pixel says
+  // along that axis: (330 - 160) / (320 - 160) of the way from the first end to the second.
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(d.b[i] - d.a[i]) <= 1.0) continue;
+    CHECK(std::abs(d.b[i] - d.a[i]) > 10.0);
+    CHECK(m.pos[i] == doctest::Approx(d.a[i] + (330.0 - 160.0) / 160.0 * (d.b[i] - d.a[i])).epsilon(0.01));
+  }
+
+  // The window draws them where they were clicked: the class colour (yellow) at the marker's
+  // pixel, the measurement's white line along its row; neither was there before.
+  // Centre and size of the pure yellow blob within 15 pixels of (cx, cy).
+  auto yellow_near = [](const ImageRgba8& img, int cx, int cy) {
+    double sx = 0, sy = 0, n = 0;
+    for (int y = cy - 15; y <= cy + 15; ++y)
+      for (int x = cx - 15; x <= cx + 15; ++x) {
+        const uint8_t* p = img.at(uint32_t(x), uint32_t(y));
+        if (p[0] != 255 || p[1] != 255 || p[2] != 0) continue;
+        sx += x;
+        sy += y;
+        ++n;
+      }
+    return std::array<double, 3>{n ? sx / n : 0, n ? sy / n : 0, n};
+  };
+  const auto disc = yellow_near(*clicked, 330, 180);
+  MESSAGE("yellow disc: " << disc[2] << " pixels centred at " << disc[0] << ", " << disc[1]);
+  CHECK(disc[2] >= 60);  // radius 6+, less the black rim
+  CHECK(std::abs(disc[0] - 330.0) < 1.5);
+  CHECK(std::abs(disc[1] - 180.0) < 1.5);
+  CHECK(yellow_near(*before, 330, 180)[2] < 10);
+  size_t white_on_row = 0;
+  for (uint32_t x = 180; x < 300; ++x)
+    for (uint32_t y = 279; y <= 281; ++y) {
+      const uint8_t* p = clicked->at(x, y);
+      white_on_row += p[0] == 255 && p[1] == 255 && p[2] == 255;
+    }
+  CHECK(white_on_row >= 120);  // a 2-pixel line: at least one white pixel per column
+}
+
 TEST_CASE("desktop viewer: a bad UI script is one line naming the file and the step") {
   const std::string dir = test::xr_out_dir("desktop_ui_bad");
   struct Case {
@@ -185,6 +269,8 @@ TEST_CASE("desktop viewer: a bad UI script is one line naming the file and the s
   const Case cases[] = {
       {nlohmann::json::array({"wait 1", "colormap 0 no-such-map"}), "step 2 ('colormap 0 no-such-map'): "},
       {nlohmann::json::array({"count 1 2 3"}), "step 1 ('count 1 2 3'): needs an annotation store"},
+      {nlohmann::json::array({"wait 1", "tool paint"}), "step 2 ('tool paint'): usage: tool navigate|count"},
+      {nlohmann::json::array({"click 5"}), "step 1 ('click 5'): usage: click X Y"},
       {nlohmann::json::array({"wait 1", "window 0 50 10"}), "step 2 ('window 0 50 10'): "},
       {nlohmann::json::array({"screenshot " + kMri}), "step 1 ('screenshot "},
       {nlohmann::json::array({"wait 1", 7}), "step 2: expected a string"},
