@@ -260,6 +260,83 @@ TEST_CASE("desktop viewer: clicks with the count and measure tools place where t
   CHECK(white_on_row >= 120);  // a 2-pixel line: at least one white pixel per column
 }
 
+TEST_CASE("desktop viewer: playback of the 7-timepoint OME-TIFF shows the timepoints in order, then pauses") {
+  const std::string dir = test::xr_out_dir("desktop_ui_play");
+  const std::string vxc = dir + "/ts.vxc";
+  // As `vxr play`'s tests: the container streams every timepoint (a plain file's session holds timepoint 0).
+  const test::ChildResult import = test::run_child(std::string(VXR_BINARY) + " import " + std::string(VXR_TESTDATA_DIR) +
+                                                   "/ome-tiff/multi-channel-time-series.ome.tif -o " + vxc);
+  REQUIRE_MESSAGE(import.exit_code == 0, import.output);
+  auto shot = [&](const std::string& name) { return dir + "/" + name + ".png"; };
+  nlohmann::json steps = nlohmann::json::array({"wait 2", "ui off"});
+  // What each timepoint looks like, paused.
+  for (int t = 0; t < 7; ++t)
+    for (const std::string s : {"time " + std::to_string(t), std::string("wait 3"), "screenshot " + shot("ref" + std::to_string(t))})
+      steps.push_back(s);
+  steps.push_back("time 0");
+  steps.push_back("wait 2");
+  steps.push_back("play");
+  constexpr int kPlayed = 14;
+  for (int i = 0; i < kPlayed; ++i) steps.push_back("screenshot " + shot("play" + std::to_string(i)));
+  for (const std::string s : {std::string("pause"), "screenshot " + shot("paused0"), std::string("wait 3"),
+                              "screenshot " + shot("paused1")})
+    steps.push_back(s);
+  const std::string script = dir + "/play.json";
+  std::ofstream(script) << steps.dump(1);
+  const test::ChildResult r = test::run_child("VXR_LOG=info xvfb-run -a -s '-screen 0 1024x768x24' " +
+                                              std::string(VXR_BINARY) + " view " + vxc + " --desktop --width " +
+                                              std::to_string(kWidth) + " --height " + std::to_string(kHeight) +
+                                              " --ui-script " + script);
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+
+  // The timepoint each screenshot's frame drew, from the viewer's log.
+  auto logged = [&](const std::string& name) {
+    const std::string key = "viewer: screenshot " + shot(name) + " (timepoint ";
+    const size_t at = r.output.find(key);
+    REQUIRE_MESSAGE(at != std::string::npos, name);
+    return uint32_t(std::stoul(r.output.substr(at + key.size())));
+  };
+  auto image = [&](const std::string& name) {
+    auto png = read_png(shot(name));
+    REQUIRE_MESSAGE(png.is_ok(), name);
+    return std::move(png).value();
+  };
+  auto distance = [](const ImageRgba8& a, const ImageRgba8& b) {
+    uint64_t d = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) d += uint64_t(std::abs(int(a.pixels[i]) - int(b.pixels[i])));
+    return d;
+  };
+  std::vector<ImageRgba8> refs;
+  for (uint32_t t = 0; t < 7; ++t) {
+    CHECK(logged("ref" + std::to_string(t)) == t);
+    refs.push_back(image("ref" + std::to_string(t)));
+    if (t > 0) CHECK(distance(refs[t], refs[t - 1]) > 0);  // the timepoints look different
+  }
+
+  // Playing: never back, never twice the same picture out of turn, and it moves on.
+  std::vector<uint32_t> shown;
+  for (int i = 0; i < kPlayed; ++i) {
+    const uint32_t t = logged("play" + std::to_string(i));
+    shown.push_back(t);
+    if (i > 0) CHECK(t >= shown[i - 1]);
+    // The picture is that timepoint's: nearer its paused render than any other timepoint's.
+    const ImageRgba8 img = image("play" + std::to_string(i));
+    uint32_t nearest = 0;
+    for (uint32_t k = 1; k < 7; ++k)
+      if (distance(img, refs[k]) < distance(img, refs[nearest])) nearest = k;
+    CHECK_MESSAGE(nearest == t, "frame " << i);
+  }
+  std::string order;
+  for (uint32_t t : shown) order += std::to_string(t) + " ";
+  MESSAGE("timepoints drawn while playing: " << order);
+  CHECK(shown.front() == 0);
+  CHECK(shown.back() > shown.front());
+  // Paused: the same timepoint frame after frame.
+  CHECK(logged("paused1") == logged("paused0"));
+  CHECK(distance(image("paused0"), image("paused1")) == 0);
+}
+
 TEST_CASE("desktop viewer: a bad UI script is one line naming the file and the step") {
   const std::string dir = test::xr_out_dir("desktop_ui_bad");
   struct Case {
@@ -271,6 +348,7 @@ TEST_CASE("desktop viewer: a bad UI script is one line naming the file and the s
       {nlohmann::json::array({"count 1 2 3"}), "step 1 ('count 1 2 3'): needs an annotation store"},
       {nlohmann::json::array({"wait 1", "tool paint"}), "step 2 ('tool paint'): usage: tool navigate|count"},
       {nlohmann::json::array({"click 5"}), "step 1 ('click 5'): usage: click X Y"},
+      {nlohmann::json::array({"wait 1", "play"}), "step 2 ('play'): one timepoint: nothing to play"},
       {nlohmann::json::array({"wait 1", "window 0 50 10"}), "step 2 ('window 0 50 10'): "},
       {nlohmann::json::array({"screenshot " + kMri}), "step 1 ('screenshot "},
       {nlohmann::json::array({"wait 1", 7}), "step 2: expected a string"},

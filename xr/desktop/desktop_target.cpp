@@ -566,6 +566,7 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   frame_ms_ = std::chrono::duration<double, std::milli>(now - last_frame_start_).count();
   last_frame_start_ = now;
   screenshot_pending_.clear();
+  state_->tick(std::chrono::duration<double>(now.time_since_epoch()).count());  // playback: any origin will do
   if (script_) {
     VXR_ASSIGN_OR_RETURN(UiScriptRunner::FrameWork work, script_->before_frame(*state_));
     if (work.done) {
@@ -634,6 +635,7 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   }
   f.settings = drawn_settings_;
   f.timepoint = state_->scene().timepoint;
+  drawn_timepoint_ = f.timepoint;
   f.should_render = true;
   f.display_time_ns = int64_t(frame_) * 16666667;
   if (!nothing_visible_)
@@ -859,7 +861,7 @@ Status DesktopTarget::write_screenshot() {
   }
   VXR_RETURN_IF_ERROR(write_png(path, img));
   if (script_ && !(card_temp_ && path == card_temp_->path())) script_->screenshot_written(path);
-  log_info("viewer: screenshot " + path);
+  log_info("viewer: screenshot " + path + " (timepoint " + std::to_string(drawn_timepoint_) + ")");
   return Status::ok();
 }
 

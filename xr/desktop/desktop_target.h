@@ -157,7 +157,8 @@ class DesktopTarget : public FrameTarget {
   bool press_on_ui_ = false;
   std::string card_shot_;  // the panel asked for a card: this frame's picture goes here first
   std::unique_ptr<TempFile> card_temp_;  // that picture when no script screenshot was due
-  std::string click_error_;              // the last click's refusal (a script stops on it)
+  std::string click_error_;
+  uint32_t drawn_timepoint_ = 0;  // the frame's (a screenshot's log line names it)              // the last click's refusal (a script stops on it)
 };
 
 }  // namespace vxr::xr

@@ -59,6 +59,21 @@ void render_panel(ViewerState& state) {
     int t = static_cast<int>(state.scene().timepoint);
     if (ImGui::SliderInt("time", &t, 0, static_cast<int>(state.timepoints()) - 1))
       (void)state.set_timepoint(static_cast<uint32_t>(t));
+    const PlaybackClock& clock = state.playback();
+    if (ImGui::Button(clock.playing() ? "pause" : "play")) clock.playing() ? state.pause() : state.play();
+    ImGui::SameLine();
+    if (ImGui::ArrowButton("##back", ImGuiDir_Left)) state.step_time(-1);
+    ImGui::SameLine();
+    if (ImGui::ArrowButton("##on", ImGuiDir_Right)) state.step_time(1);
+    ImGui::SameLine();
+    bool loop = clock.loop();
+    if (ImGui::Checkbox("loop", &loop)) state.set_loop(loop);
+    float speed = static_cast<float>(clock.speed());
+    if (ImGui::SliderFloat("speed", &speed, 1.0f / 16, 16.0f, "%.3gx", ImGuiSliderFlags_Logarithmic))
+      (void)state.set_speed(speed);
+    const PlaybackCounters& c = clock.counters();
+    ImGui::TextDisabled("%.3g timepoints/s: %llu shown, %llu dropped", clock.fps() * clock.speed(),
+                        static_cast<unsigned long long>(c.shown), static_cast<unsigned long long>(c.dropped));
   }
 }
 
