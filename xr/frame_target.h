@@ -21,6 +21,8 @@
 
 namespace vxr {
 struct RenderSettings;  // scene/render_settings.h (not included: its VolumeTransform is not xr's)
+class ChunkCache;
+class ChunkSource;
 }
 
 namespace vxr::xr {
@@ -110,6 +112,9 @@ class FrameTarget {
   }
   // Destroys everything tied to the device; called before the context dies.
   virtual void detach() = 0;
+  // The chunk cache the renderer streams from (null: gone) and its source;
+  // the desktop viewer prefetches the timepoints playback needs next into it.
+  virtual void use_chunk_cache(ChunkCache* cache, const ChunkSource* source) { (void)cache, (void)source; }
 };
 
 }  // namespace vxr::xr

@@ -83,7 +83,13 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
   std::unique_ptr<EyeRenderer> eyes;
   Detach detach{target};
   ChunkCache cache(source, {options.cache_bytes, options.loader_threads});
+  struct CacheHook {  // the target lets go of the cache before it dies
+    FrameTarget& t;
+    ~CacheHook() { t.use_chunk_cache(nullptr, nullptr); }
+  };
+  CacheHook cache_hook{target};
   VXR_RETURN_IF_ERROR(target.attach(*ctx));
+  target.use_chunk_cache(&cache, source.get());
   VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, source, &cache));
   // Pool changes the settings need (apron 2 for gradients) before any frame records.
   VXR_RETURN_IF_ERROR(eyes->renderer().prepare(options.settings));

@@ -534,6 +534,22 @@ Status DesktopTarget::screenshot() {
 
 // ---- the viewer ----------------------------------------------------------
 
+void DesktopTarget::use_chunk_cache(ChunkCache* cache, const ChunkSource* source) {
+  prefetch_.clear();
+  if (!state_ || !cache || !source || state_->timepoints() < 2) return;
+  // The finest level at which a few timepoints of every drawn channel fit the prefetch share of the
+  // cache; with none, playback shows what the renderer has streamed (as `vxr play`).
+  const uint32_t channels = uint32_t(std::min<size_t>(state_->channel_count(), source->info().channels));
+  const double share = 0.5 / std::max(1u, channels);
+  for (uint32_t level = 0; level < source->levels().size() && prefetch_.empty(); ++level) {
+    const TimepointPrefetcher probe(*cache, *source, level, 0, share);
+    if (double(probe.bytes_per_timepoint()) * 4.0 > double(cache->budget_bytes()) * share) continue;
+    for (uint32_t c = 0; c < channels; ++c) prefetch_.emplace_back(*cache, *source, level, c, share);
+    log_info("viewer: playback prefetches level " + std::to_string(level) + " of " + std::to_string(channels) +
+             " channel(s), " + std::to_string(probe.bytes_per_timepoint() >> 10) + " KiB per timepoint and channel");
+  }
+}
+
 CameraState viewer_world_camera(const ViewerState& state, const VolumePlacement& placement) {
   const glm::dvec3 e = placement.extent();
   const double longest = std::max({e.x, e.y, e.z});
@@ -566,7 +582,14 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   frame_ms_ = std::chrono::duration<double, std::milli>(now - last_frame_start_).count();
   last_frame_start_ = now;
   screenshot_pending_.clear();
-  state_->tick(std::chrono::duration<double>(now.time_since_epoch()).count());  // playback: any origin will do
+  // Playback as volume/playback.h shows it: the next timepoints queued, a due one shown once loaded.
+  if (state_->playback().playing())
+    for (TimepointPrefetcher& p : prefetch_) p.update(state_->playback().upcoming(8));
+  state_->tick(std::chrono::duration<double>(now.time_since_epoch()).count(),  // any origin will do
+               [this](uint32_t t) {
+                 return std::all_of(prefetch_.begin(), prefetch_.end(),
+                                    [t](const TimepointPrefetcher& p) { return p.ready(t); });
+               });
   if (script_) {
     VXR_ASSIGN_OR_RETURN(UiScriptRunner::FrameWork work, script_->before_frame(*state_));
     if (work.done) {

@@ -24,6 +24,7 @@
 #include "core/output_file.h"
 #include "gpu/resources.h"
 #include "scene/render_settings.h"
+#include "volume/playback.h"
 #include "xr/frame_target.h"
 
 struct GLFWwindow;
@@ -76,6 +77,7 @@ class DesktopTarget : public FrameTarget {
   Status end_frame(const FrameState& frame, const FrameContent& content) override;
   void request_exit() override { exit_requested_ = true; }
   void detach() override;
+  void use_chunk_cache(ChunkCache* cache, const ChunkSource* source) override;
 
   // Mouse and keyboard navigation (called from GLFW callbacks).
   void on_drag(double dx, double dy);
@@ -157,8 +159,9 @@ class DesktopTarget : public FrameTarget {
   bool press_on_ui_ = false;
   std::string card_shot_;  // the panel asked for a card: this frame's picture goes here first
   std::unique_ptr<TempFile> card_temp_;  // that picture when no script screenshot was due
-  std::string click_error_;
-  uint32_t drawn_timepoint_ = 0;  // the frame's (a screenshot's log line names it)              // the last click's refusal (a script stops on it)
+  std::string click_error_;              // the last click's refusal (a script stops on it)
+  uint32_t drawn_timepoint_ = 0;          // the frame's (a screenshot's log line names it)
+  std::vector<TimepointPrefetcher> prefetch_;  // playback: one per channel of the view, into run_view's cache
 };
 
 }  // namespace vxr::xr

@@ -72,8 +72,9 @@ void render_panel(ViewerState& state) {
     if (ImGui::SliderFloat("speed", &speed, 1.0f / 16, 16.0f, "%.3gx", ImGuiSliderFlags_Logarithmic))
       (void)state.set_speed(speed);
     const PlaybackCounters& c = clock.counters();
-    ImGui::TextDisabled("%.3g timepoints/s: %llu shown, %llu dropped", clock.fps() * clock.speed(),
-                        static_cast<unsigned long long>(c.shown), static_cast<unsigned long long>(c.dropped));
+    ImGui::TextDisabled("%.3g timepoints/s: %llu shown, %llu dropped, %llu waits for data",
+                        clock.fps() * clock.speed(), static_cast<unsigned long long>(c.shown),
+                        static_cast<unsigned long long>(c.dropped), static_cast<unsigned long long>(c.stalls));
   }
 }
 

@@ -193,11 +193,10 @@ Status ViewerState::set_timepoint(uint32_t t) {
   return Status::ok();
 }
 
-void ViewerState::tick(double now_s) {
+void ViewerState::tick(double now_s, const std::function<bool(uint32_t)>& ready) {
   now_s_ = now_s;
   if (!clock_.playing()) return;
-  // As `vxr play`: the renderer streams a timepoint's bricks itself, so every timepoint counts as ready.
-  const PlaybackFrame f = clock_.tick(now_s, [](uint32_t) { return true; });
+  const PlaybackFrame f = clock_.tick(now_s, ready);
   if (f.timepoint != scene_.timepoint) {
     scene_.timepoint = f.timepoint;
     changed();

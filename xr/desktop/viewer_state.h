@@ -70,7 +70,8 @@ class ViewerState {
   // Timepoint playback through the PlaybackClock of `vxr play`
   // (volume/playback.h): the window passes its frame times to tick(); keys,
   // commands and the panel act at the latest of them.
-  void tick(double now_s);
+  // `ready(t)`: timepoint t's data is loaded (else the clock waits on the current one).
+  void tick(double now_s, const std::function<bool(uint32_t)>& ready = [](uint32_t) { return true; });
   const PlaybackClock& playback() const { return clock_; }
   void play();
   void pause();
