@@ -231,6 +231,41 @@ TEST_CASE("viewer state: playback (fake clock) advances in order, keys pause, st
   CHECK(one.apply_command("play").message().find("nothing to play") != std::string::npos);
 }
 
+TEST_CASE("viewer state: a card's camera goes back to the orbit that made it, restore checks the card") {
+  ViewerState v = two_channels(4);
+  v.orbit_drag(120, -80);
+  v.pan_drag(30, 10, 600);
+  v.zoom(2);
+  const OrbitCamera made = v.orbit();
+  CameraState world = made.camera();
+  for (int i = 0; i < 3; ++i) {  // as viewer_world_camera stores it: longest side 2.5 world units
+    world.eye[i] *= 2.5;
+    world.target[i] *= 2.5;
+  }
+  const OrbitCamera back = orbit_for_camera(world, 2.5);
+  CHECK(back.distance == doctest::Approx(made.distance));
+  CHECK(back.yaw == doctest::Approx(made.yaw));
+  CHECK(back.pitch == doctest::Approx(made.pitch));
+  for (int i = 0; i < 3; ++i) CHECK(back.focus[i] == doctest::Approx(made.focus[i]));
+  CHECK(dist(back.camera().up, made.camera().up) < 1e-9);
+
+  ViewerState w = two_channels(4);
+  RenderSettings one_channel;
+  one_channel.channels.resize(1);
+  CHECK_FALSE(w.restore(one_channel, 1, back).is_ok());  // another channel count
+  RenderSettings saved = v.render();
+  saved.channels[1].colormap = "viridis";
+  CHECK_FALSE(w.restore(saved, 4, back).is_ok());  // no such timepoint
+  CHECK(w.orbit() == two_channels(4).orbit());     // refused: nothing changed
+  REQUIRE(w.apply_command("play").is_ok());
+  REQUIRE(w.restore(saved, 3, back).is_ok());
+  CHECK(w.render() == saved);
+  CHECK(w.scene().timepoint == 3);
+  CHECK(w.playback().timepoint() == 3);
+  CHECK_FALSE(w.playback().playing());
+  CHECK(w.orbit().distance == doctest::Approx(made.distance));
+}
+
 TEST_CASE("viewer state: script commands drive the same edits and bad lines are named") {
   ViewerState v = two_channels();
   REQUIRE(v.apply_command("colormap 1 magma").is_ok());

@@ -786,18 +786,8 @@ void DesktopTarget::restore_card(uint64_t id) {
   }
   OrbitCamera orbit = state_->orbit();
   if (scene->has_camera) {
-    // The card's camera is in world units; the orbit in units of the volume's longest side.
     const glm::dvec3 e = o_.viewer->placement.extent();
-    const double longest = std::max({e.x, e.y, e.z});
-    const glm::dvec3 eye = vec(scene->camera.eye) / longest, focus = vec(scene->camera.target) / longest;
-    const glm::dvec3 back = eye - focus;
-    orbit.distance = glm::length(back);
-    orbit.focus = {focus.x, focus.y, focus.z};
-    if (orbit.distance > 0) {
-      orbit.pitch = std::asin(std::clamp(back.y / orbit.distance, -1.0, 1.0));
-      orbit.yaw = std::atan2(back.x, back.z);
-    }
-    orbit.fov_y_deg = scene->camera.fov_y_deg;
+    orbit = orbit_for_camera(scene->camera, std::max({e.x, e.y, e.z}));
   }
   const Status s = state_->restore(scene->render, scene->timepoint, orbit);
   panel_->message = s ? "card " + std::to_string(id) + " shown" : "card " + std::to_string(id) + ": " + s.message();

@@ -49,6 +49,22 @@ CameraState OrbitCamera::camera() const {
   return c;
 }
 
+OrbitCamera orbit_for_camera(const CameraState& c, double unit) {
+  OrbitCamera o;
+  std::array<double, 3> back;
+  for (int i = 0; i < 3; ++i) {
+    o.focus[i] = c.target[i] / unit;
+    back[i] = (c.eye[i] - c.target[i]) / unit;
+  }
+  o.distance = std::sqrt(back[0] * back[0] + back[1] * back[1] + back[2] * back[2]);
+  if (o.distance > 0) {
+    o.pitch = std::asin(std::clamp(back[1] / o.distance, -1.0, 1.0));
+    o.yaw = std::atan2(back[0], back[2]);
+  }
+  o.fov_y_deg = c.fov_y_deg;
+  return o;
+}
+
 const std::vector<ShortcutHelp>& viewer_shortcuts() {
   static const std::vector<ShortcutHelp> table = {
       {"Left drag", "orbit"},           {"Right / middle drag", "pan"},

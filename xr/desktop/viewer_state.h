@@ -26,6 +26,9 @@ struct OrbitCamera {
   bool operator==(const OrbitCamera&) const = default;
   CameraState camera() const;
 };
+// The orbit whose camera() is `c` scaled by 1 / `unit` (a card's camera in
+// world units back to the viewer's orbit, in units of the volume's longest side).
+OrbitCamera orbit_for_camera(const CameraState& c, double unit);
 
 // Keys the viewer reacts to, independent of the window system.
 enum class ViewerKey { kResetView, kAxisX, kAxisY, kAxisZ, kNextModel, kNextColormap, kTimeNext, kTimePrev,
