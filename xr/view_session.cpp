@@ -167,6 +167,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
       total_ms += ms;
       stats.frame_ms.push_back(ms);
       stats.lod_bias.push_back(fs.lod.lod_bias);
+      stats.frame_missing.push_back(missing);
       stats.max_frame_ms = std::max(stats.max_frame_ms, ms);
       stats.mean_frame_ms = total_ms / double(stats.frame_ms.size());
       if (views_drawn == frame->views.size() && views_drawn > 0) {

@@ -61,6 +61,7 @@ struct ViewStats {
   double max_frame_ms = 0.0;
   std::vector<double> frame_ms;  // every rendered frame's time, in order
   std::vector<double> lod_bias;  // the LOD bias each rendered frame used
+  std::vector<uint64_t> frame_missing;  // bricks each rendered frame drew from an ancestor (still streaming)
   uint64_t rays = 0;
   uint64_t pipelines_first_frame = 0;        // pipelines built up to the end of frame 1
   uint64_t pipelines_after_first_frame = 0;  // built after it (poses must build none)
