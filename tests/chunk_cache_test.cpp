@@ -8,6 +8,7 @@
 #include <mutex>
 #include <thread>
 
+#include "volume/chunk_buffers.h"
 #include "volume/chunk_cache.h"
 #include "volume/container_reader.h"
 #include "volume/memory_slab_source.h"
@@ -226,4 +227,28 @@ TEST_CASE("chunk cache: over a real container it returns what the reader returns
     REQUIRE(direct.is_ok());
     CHECK(cached->data == (*direct)->data);
   }
+}
+
+TEST_CASE("chunk buffers: a dropped chunk's buffer is handed to the next chunk of its size, never while in use") {
+  const size_t bytes = 123457;  // a size no other test's chunks have
+  auto first = std::make_unique<vxr::Chunk>();
+  first->data = vxr::take_chunk_buffer(bytes);
+  REQUIRE(first->data.size() == bytes);
+  first->data[0] = 42;
+  const uint8_t* storage = first->data.data();
+  std::shared_ptr<const vxr::Chunk> shared = vxr::share_recycling(std::move(first));
+  auto copy = shared;
+  shared.reset();
+  // Still referenced: a new buffer must not be the one in use.
+  auto other = vxr::take_chunk_buffer(bytes);
+  CHECK(other.data() != storage);
+  const uint64_t before = vxr::pooled_chunk_buffer_bytes();
+  copy.reset();  // last reference: back to the pool
+  CHECK(vxr::pooled_chunk_buffer_bytes() == before + bytes);
+  auto again = vxr::take_chunk_buffer(bytes);
+  CHECK(again.data() == storage);
+  CHECK(again.size() == bytes);
+  CHECK(vxr::pooled_chunk_buffer_bytes() == before);
+  // Another size is never served from it.
+  CHECK(vxr::take_chunk_buffer(bytes + 1).size() == bytes + 1);
 }

@@ -5,6 +5,7 @@
 
 #include <set>
 
+#include "volume/dense_chunk_source.h"
 #include "volume/chunk_cache.h"
 #include "volume/playback.h"
 
@@ -149,6 +150,21 @@ TEST_CASE("playback clock: upcoming lists the next timepoints in play order") {
   CHECK(once.upcoming(3) == std::vector<uint32_t>{4});
 }
 
+TEST_CASE("playback clock: while waiting on a due timepoint past the prefetch window, upcoming starts there") {
+  // A late first frame makes timepoint 7 due at once; if upcoming kept listing
+  // from the shown one (1, 2, 3), timepoint 7 would never be loaded.
+  PlaybackClock clock(10, {.fps = 10});
+  clock.play(0.0);
+  clock.tick(0.0, always_ready);  // shows 0
+  const auto only = [](uint32_t ok) { return [ok](uint32_t t) { return t == ok; }; };
+  CHECK_FALSE(clock.tick(0.75, only(0)).is_new);  // 7 is due, not loaded: wait
+  CHECK(clock.upcoming(3) == std::vector<uint32_t>{7, 8, 9});
+  const auto f = clock.tick(0.8, only(7));
+  CHECK(f.is_new);
+  CHECK(f.timepoint == 7);
+  CHECK(f.dropped == 6);
+}
+
 TEST_CASE("timepoint prefetcher: queues the nearest timepoints within its budget share, cancels stale ones") {
   auto source = std::make_shared<TimeSource>();
   const uint64_t chunk_bytes = 1000 + sizeof(Chunk) + 64;
@@ -261,4 +277,68 @@ TEST_CASE("play headless: looping plays in order within every loop") {
   CHECK(doc["loops"].get<uint64_t>() >= loops.size() - 1);  // a very slow frame may skip a whole loop
   for (const auto& l : loops)
     for (size_t i = 1; i < l.size(); ++i) CHECK(l[i] > l[i - 1]);
+}
+
+TEST_CASE("bench movie: a movie longer than the cache is read again every loop; render run counts every timepoint") {
+  // 6 timepoints, prefetch 1: the cache holds 2 x 2 volumes, so each of the 2
+  // loops reads and decodes all 6 again (evictions), and the played run
+  // shows or drops each timepoint exactly once.
+  const std::filesystem::path dir = vxr::test::scratch_dir("playback", "bench_movie");
+  const auto run = vxr::test::run_vxr("bench movie --dims 48 40 36 --timepoints 6 --prefetch 1 --loops 2 --size 32 "
+                                      "--fps 1000 --out " + vxr::test::shell_quote(dir.string()),
+                                      dir, 300);
+  REQUIRE_MESSAGE(run.rc == 0, run.err);
+  std::ifstream f(dir / "movie.json");
+  const auto doc = nlohmann::json::parse(f);
+  CHECK(doc["timepoints"].get<uint32_t>() == 6);
+  CHECK(doc["data_path_volumes_per_s"].get<double>() > 0);
+  CHECK(doc["lz4_decode_bound_volumes_per_s"].get<double>() > 0);
+  CHECK(doc["per_volume_ms"].size() == 12);
+  const auto chunks = doc["level0_chunks_per_volume"].get<uint64_t>();
+  CHECK(doc["cache"]["loads"].get<uint64_t>() >= 2 * 6 * chunks);
+  CHECK(doc["cache"]["evictions"].get<uint64_t>() > 0);
+  CHECK(doc["uploaded_bytes"].get<uint64_t>() > 0);
+  CHECK(doc["render_volumes_per_s"].get<double>() > 0);
+  CHECK(doc["shown"].get<uint64_t>() >= 1);
+  CHECK(doc["shown"].get<uint64_t>() + doc["dropped"].get<uint64_t>() == 6);
+}
+
+TEST_CASE("dense chunk source: a time series serves each timepoint's own voxels and ranges") {
+  std::vector<std::vector<vxr::DenseVolume>> series;
+  for (uint8_t t = 0; t < 3; ++t) {
+    vxr::DenseVolume v;
+    v.dims = {70, 9, 5};  // two chunks along x at chunk size 64
+    v.dtype = vxr::DType::kU8;
+    v.data.assign(v.byte_size(), uint8_t(10 * (t + 1)));
+    v.data[0] = uint8_t(200 + t);  // one voxel marks the timepoint in chunk (0,0,0)
+    series.push_back({v});
+  }
+  auto src = vxr::DenseChunkSource::create_series(std::move(series));
+  REQUIRE(src);
+  CHECK((*src)->info().timepoints == 3);
+  for (uint32_t t = 0; t < 3; ++t) {
+    auto c = (*src)->read({0, 0, 0, 0, 0, t});
+    REQUIRE(c);
+    const uint32_t a = (*src)->apron(), e = (*c)->edge;
+    CHECK((*c)->data[(size_t(a) * e + a) * e + a] == 200 + t);  // voxel (0,0,0) of the interior
+    auto far = (*src)->stats({0, 1, 0, 0, 0, t});
+    REQUIRE(far);
+    CHECK(far->min == 10 * (t + 1));
+    CHECK(far->max == 10 * (t + 1));
+  }
+  CHECK_FALSE((*src)->read({0, 0, 0, 0, 0, 3}));  // past the last timepoint
+}
+
+TEST_CASE("play headless: an OME-TIFF time series plays without import, every timepoint shown or dropped once") {
+  const std::string tif = std::string(VXR_TESTDATA_DIR) + "/ome-tiff/multi-channel-time-series.ome.tif";
+  const auto doc = play(tif, "ome_tiff_direct", "--fps 4");
+  REQUIRE(doc["timepoints"].get<uint32_t>() == 7);
+  const auto loops = loops_of(doc);
+  REQUIRE(loops.size() == 1);
+  const auto& shown = loops[0];
+  REQUIRE(shown.size() >= 2);
+  CHECK(shown.front() == 0);
+  CHECK(shown.back() == 6);
+  for (size_t i = 1; i < shown.size(); ++i) CHECK(shown[i] > shown[i - 1]);
+  CHECK(doc["dropped"].get<uint64_t>() + shown.size() == 7);
 }

@@ -12,7 +12,7 @@
 #include "core/image.h"
 #include "core/output_file.h"
 #include "render/camera.h"
-#include "render/lod/brick_renderer.h"
+#include "render/movie_player.h"
 #include "render/volume_session.h"
 #include "volume/playback.h"
 
@@ -26,10 +26,12 @@ struct PlayOptions {
   bool loop = false;
   bool headless = false;
   std::string out_dir;
-  int frames = 0;             // 0: until the end (looping: one loop and a bit)
+  int frames = 0;             // display frames (stalls included); 0: until the end (looping: one loop and a bit)
   double frame_delay_ms = 0;  // extra time per frame: a forced slow renderer
   uint32_t size = 256;
   uint32_t start = 0;         // first timepoint
+  uint32_t prefetch = 4;      // timepoints decoded ahead
+  int level = -1;             // pyramid level played (-1: the finest that fits the prefetch budget)
   SessionFlags session;
 };
 
@@ -48,44 +50,47 @@ int run_play(const PlayOptions& o) {
                 kExitUsage);
   auto gpu = open_gpu();
   if (!gpu) return fail(gpu.status());
-  auto renderer = BrickRenderer::create(**gpu, src, {});
-  if (!renderer) return fail(renderer.status());
-  BrickRenderer& r = **renderer;
-  const Camera camera = orbit_camera(r.placement(), 30.0, 20.0);
+  MoviePlayerOptions mo;
+  mo.playback = {.fps = o.fps, .speed = o.speed, .loop = o.loop};
+  mo.prefetch = o.prefetch;
+  mo.level = o.level;
+  auto player = MoviePlayer::create(**gpu, session->source, mo);
+  if (!player) return fail(player.status());
+  MoviePlayer& p = **player;
+  PlaybackClock& clock = p.clock();
+  const Camera camera = orbit_camera(p.renderer().placement(), 30.0, 20.0);
 
-  PlaybackClock clock(T, {.fps = o.fps, .speed = o.speed, .loop = o.loop});
   clock.step(int(o.start), 0.0);
-  const int max_frames = o.frames > 0 ? o.frames : int(T * 4 + 8);
   const auto t0 = std::chrono::steady_clock::now();
   auto now = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   clock.play(now());
+  // The log holds the frames that showed a new timepoint (a stall, waiting
+  // for data, is counted, not logged).
   nlohmann::json frames = nlohmann::json::array();
-  BrickFrameSettings frame;
   ImageRgba8 last;
-  std::error_code ec;
-  std::filesystem::create_directories(o.out_dir, ec);
-  for (int i = 0; i < max_frames; ++i) {
-    // The renderer streams bricks itself; a shown timepoint is drawn until
-    // complete, so a slow data path shows up as frame time (and drops).
-    const PlaybackFrame f = clock.tick(now(), [](uint32_t) { return true; });
-    if (f.is_new) {
-      frame.lod.timepoint = f.timepoint;
-      BrickFrameStats st;
-      for (int pass = 0; pass < 64; ++pass) {
-        auto image = r.render(camera, session->settings, frame, o.size, o.size, &st);
-        if (!image) return fail(image.status());
-        last = std::move(*image);
-        if (st.lod.missing == 0) break;
-      }
+  double last_new = now();
+  for (int i = 0; o.frames <= 0 || i < o.frames; ++i) {
+    // A due timepoint is drawn once decoded; until then the clock holds the
+    // current one (a stall) or, when late, drops: never a repeat or a reorder.
+    auto f = p.frame(now(), camera, session->settings, o.size, o.size, &last);
+    if (!f) return fail(f.status());
+    if (f->is_new) {
+      frames.push_back({{"frame", i}, {"timepoint", f->timepoint}, {"new", true}, {"dropped", f->dropped},
+                        {"wrapped", f->wrapped}});
+      last_new = now();
+    } else if (now() - last_new > 60.0) {
+      return fail(internal_error(o.input + ": timepoint " + std::to_string(f->timepoint) +
+                                 "'s successor did not load within 60 s"));
     }
     if (o.frame_delay_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(o.frame_delay_ms));
-    frames.push_back({{"frame", i}, {"timepoint", f.timepoint}, {"new", f.is_new}, {"dropped", f.dropped},
-                      {"wrapped", f.wrapped}});
+    else if (!f->is_new) std::this_thread::sleep_for(std::chrono::milliseconds(1));  // waiting for data: do not spin
     if (!clock.playing()) break;
+    // Looping without --frames: one loop and a bit.
+    if (o.frames <= 0 && clock.counters().loops >= 1 && clock.timepoint() >= T / 2) break;
   }
   const auto& c = clock.counters();
   nlohmann::json doc = {{"input", o.input}, {"timepoints", T}, {"fps", o.fps}, {"speed", o.speed}, {"loop", o.loop},
-                        {"shown", c.shown}, {"dropped", c.dropped}, {"stalls", c.stalls}, {"loops", c.loops},
+                        {"shown", c.shown}, {"dropped", c.dropped}, {"stalls", c.stalls}, {"loops", c.loops}, {"level", p.level()},
                         {"frames", frames}};
   const std::string json_path = (std::filesystem::path(o.out_dir) / "play.json").string();
   if (Status s = write_file_atomically(json_path, doc.dump(1)); !s) return fail(s);
@@ -108,8 +113,11 @@ void add_play_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--timepoint", o->start, "first timepoint");
   cmd->add_flag("--headless", o->headless, "no window: render offscreen, log the shown timepoints");
   cmd->add_option("--out", o->out_dir, "headless: directory for play.json and last.png")->default_val("out/play");
-  cmd->add_option("--frames", o->frames, "stop after this many frames (default: the end, or 4 loops)");
+  cmd->add_option("--frames", o->frames, "stop after this many display frames (default: the end; looping: one loop and a half)");
   cmd->add_option("--frame-delay-ms", o->frame_delay_ms, "add this much time to every frame (a slow renderer)");
+  cmd->add_option("--prefetch", o->prefetch, "timepoints decoded ahead")->check(CLI::Range(1u, 64u));
+  cmd->add_option("--level", o->level, "pyramid level to play (default: the finest whose timepoint fits the prefetch budget)")
+      ->check(CLI::Range(0, 64));
   cmd->add_option("--size", o->size, "headless image side, pixels")->check(CLI::Range(16u, 4096u));
   cmd->add_option("--colormap", o->session.colormap, "colormap name");
   cmd->add_option("--window", o->session.window, "LO,HI in data units");

@@ -127,7 +127,10 @@ Result<VolumeSession> open_volume_session(const std::string& input, const Sessio
     VXR_ASSIGN_OR_RETURN(LoadedVolume loaded, load_for_render(input, 1u << 20, flags.max_dense_bytes));
     out.notes = loaded.notes;
     out.description = input + " (" + loaded.format + ")";
-    VXR_ASSIGN_OR_RETURN(out.source, DenseChunkSource::create(std::move(loaded.channels)));
+    std::vector<std::vector<DenseVolume>> series;
+    series.push_back(std::move(loaded.channels));
+    for (auto& t : loaded.later_timepoints) series.push_back(std::move(t));
+    VXR_ASSIGN_OR_RETURN(out.source, DenseChunkSource::create_series(std::move(series)));
   }
   const VolumeInfo& info = out.source->info();
   out.description += " (" + dims_text(info) + ", " + std::to_string(out.source->levels().size()) + " levels)";

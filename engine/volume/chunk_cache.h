@@ -121,4 +121,23 @@ class ChunkCache {
   std::vector<std::thread> threads_;
 };
 
+// A ChunkSource that reads through a cache: read() is the cache's
+// get_or_load, so whatever the loader threads decoded ahead is used as is.
+// For code that takes a ChunkSource (the brick pool) and should share the
+// cache's work (playback).
+class CachedChunkSource final : public ChunkSource {
+ public:
+  CachedChunkSource(const ChunkSource& inner, ChunkCache& cache) : inner_(inner), cache_(cache) {}
+  const VolumeInfo& info() const override { return inner_.info(); }
+  const std::vector<LevelInfo>& levels() const override { return inner_.levels(); }
+  uint32_t chunk_size() const override { return inner_.chunk_size(); }
+  uint32_t apron() const override { return inner_.apron(); }
+  Result<ChunkStats> stats(const ChunkKey& key) const override { return inner_.stats(key); }
+  Result<std::shared_ptr<const Chunk>> read(const ChunkKey& key) const override { return cache_.get_or_load(key); }
+
+ private:
+  const ChunkSource& inner_;
+  ChunkCache& cache_;
+};
+
 }  // namespace vxr

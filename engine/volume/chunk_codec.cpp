@@ -211,10 +211,10 @@ Status decode_payload(vxc::Codec codec, DType dtype, const ChunkStats& stats, st
     case vxc::Codec::kShuffleLz4: {
       // LZ4 expands at most ~255x; refuse before allocating for a claim it cannot meet.
       if (out.size() > max_lz4_output(stored.size())) return corrupt("LZ4 payload is too short to decode to the chunk size");
-      std::vector<uint8_t> tmp;
+      thread_local std::vector<uint8_t> tmp;  // reused: no page faults per chunk
       uint8_t* dst = out.data();
       if (codec == vxc::Codec::kShuffleLz4) {
-        tmp.resize(out.size());
+        if (tmp.size() < out.size()) tmp.resize(out.size());
         dst = tmp.data();
       }
       const int n = LZ4_decompress_safe(reinterpret_cast<const char*>(stored.data()), reinterpret_cast<char*>(dst),

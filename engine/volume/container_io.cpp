@@ -10,6 +10,7 @@
 
 #include <xxhash.h>
 
+#include "volume/chunk_buffers.h"
 #include "volume/chunk_codec.h"
 
 namespace vxr {
@@ -174,9 +175,11 @@ namespace {
 // The checks shared by read_chunk_record and check_chunk_record: the record
 // header agrees with the entry, the sizes are possible for the codec (before
 // anything is allocated from them), and the stored bytes pass their checksum.
-// Returns the stored bytes.
-Result<std::vector<uint8_t>> load_record(const ContainerFile& file, const ContainerLayout& layout,
-                                         const vxc::IndexEntry& entry, uint64_t limit, const std::string& what) {
+// Returns the stored bytes: a view of a per-thread buffer that is reused from
+// read to read (a fresh buffer per chunk cost playback a page fault every 4 KiB),
+// valid until this thread's next call.
+Result<std::span<const uint8_t>> load_record(const ContainerFile& file, const ContainerLayout& layout,
+                                             const vxc::IndexEntry& entry, uint64_t limit, const std::string& what) {
   auto rec = read_record_header(file, entry.offset, limit);
   if (!rec) return corrupt(what + ": " + rec.status().message() + "; run `vxr verify`");
   if (!same_entry(entry_from_record(*rec, entry.offset), entry))
@@ -190,9 +193,11 @@ Result<std::vector<uint8_t>> load_record(const ContainerFile& file, const Contai
       (lz4 && entry.raw_size > max_lz4_output(entry.stored_size)))
     return corrupt(what + ": stored size " + std::to_string(entry.stored_size) + " is impossible for its codec; run `vxr verify`");
   // stored_size <= raw_size here (or LZ4's bound of the file's own bytes): read_record_header checked it fits the file.
-  std::vector<uint8_t> stored(entry.stored_size);
+  thread_local std::vector<uint8_t> buffer;
+  if (buffer.size() < entry.stored_size) buffer.resize(entry.stored_size);
+  const std::span<const uint8_t> stored(buffer.data(), entry.stored_size);
   if (!stored.empty()) {
-    VXR_RETURN_IF_ERROR(file.read_at(stored.data(), stored.size(), entry.offset + sizeof(vxc::RecordHeader)));
+    VXR_RETURN_IF_ERROR(file.read_at(buffer.data(), stored.size(), entry.offset + sizeof(vxc::RecordHeader)));
     if (vxc::checksum(stored.data(), stored.size()) != entry.payload_checksum)
       return corrupt(what + ": payload fails its checksum (the file is damaged); run `vxr verify`");
   }
@@ -205,22 +210,22 @@ Result<std::shared_ptr<const Chunk>> read_chunk_record(const ContainerFile& file
                                                        const vxc::IndexEntry& entry, uint64_t limit) {
   const ChunkKey key = key_of(entry);
   const std::string what = file.path() + ": " + describe_key(key);
-  VXR_ASSIGN_OR_RETURN(const std::vector<uint8_t> stored, load_record(file, layout, entry, limit, what));
-  auto chunk = std::make_shared<Chunk>();
+  VXR_ASSIGN_OR_RETURN(const std::span<const uint8_t> stored, load_record(file, layout, entry, limit, what));
+  auto chunk = std::make_unique<Chunk>();
   chunk->key = key;
   chunk->edge = layout.edge();
   chunk->dtype = layout.info.dtype;
   chunk->stats = {entry.min, entry.max};
-  chunk->data.resize(entry.raw_size);
+  chunk->data = take_chunk_buffer(entry.raw_size);  // every byte is written by the decoder
   if (Status s = decode_payload(static_cast<vxc::Codec>(entry.codec), chunk->dtype, chunk->stats, stored, chunk->data); !s)
     return corrupt(what + ": " + s.message());
-  return std::shared_ptr<const Chunk>(std::move(chunk));
+  return share_recycling(std::move(chunk));
 }
 
 Status check_chunk_record(const ContainerFile& file, const ContainerLayout& layout, const vxc::IndexEntry& entry,
                           uint64_t limit) {
   const std::string what = file.path() + ": " + describe_key(key_of(entry));
-  VXR_ASSIGN_OR_RETURN(const std::vector<uint8_t> stored, load_record(file, layout, entry, limit, what));
+  VXR_ASSIGN_OR_RETURN(const std::span<const uint8_t> stored, load_record(file, layout, entry, limit, what));
   const auto codec = static_cast<vxc::Codec>(entry.codec);
   Status s = Status::ok();
   if (codec == vxc::Codec::kUniform) {

@@ -20,6 +20,9 @@ class DenseChunkSource final : public ChunkSource {
   // `channels`: one volume per channel (timepoint 0), same dims and dtype.
   static Result<std::shared_ptr<DenseChunkSource>> create(std::vector<DenseVolume> channels,
                                                           uint32_t chunk_size = 64, uint32_t apron = 2);
+  // A time series: timepoints[t][c], every volume the same dims and dtype.
+  static Result<std::shared_ptr<DenseChunkSource>> create_series(std::vector<std::vector<DenseVolume>> timepoints,
+                                                                 uint32_t chunk_size = 64, uint32_t apron = 2);
 
   const VolumeInfo& info() const override { return info_; }
   const std::vector<LevelInfo>& levels() const override { return levels_; }
@@ -37,9 +40,9 @@ class DenseChunkSource final : public ChunkSource {
   VolumeInfo info_;
   std::vector<LevelInfo> levels_;
   uint32_t cs_ = 64, apron_ = 2;
-  std::vector<std::vector<DenseVolume>> data_;  // [level][channel]
-  std::vector<size_t> first_chunk_;             // per level: index of its chunk 0 in stats_ (per channel)
-  std::vector<std::vector<ChunkStats>> stats_;  // [channel][chunk]
+  std::vector<std::vector<std::vector<DenseVolume>>> data_;  // [timepoint][level][channel]
+  std::vector<size_t> first_chunk_;  // per level: index of its chunk 0 in stats_ (per timepoint and channel)
+  std::vector<std::vector<std::vector<ChunkStats>>> stats_;  // [timepoint][channel][chunk]
 };
 
 }  // namespace vxr

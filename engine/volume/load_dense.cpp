@@ -90,11 +90,32 @@ Result<LoadedVolume> load_for_render(const std::string& path, uint32_t max_dim, 
   out.notes = src->warnings();
   const uint32_t channels = std::min<uint32_t>(info.channels, 4);
   if (info.channels > 4) out.notes.push_back("showing the first 4 of " + std::to_string(info.channels) + " channels");
-  if (info.timepoints > 1) out.notes.push_back("showing timepoint 0 of " + std::to_string(info.timepoints));
   const uint64_t bytes = info.voxels_per_volume() * dtype_bytes(info.dtype);
   if (bytes > (uint64_t(8) << 30))
     return unsupported(path + ": " + std::to_string(bytes >> 20) + " MiB per channel is too large to render "
                               "whole; convert it to a .vxc pyramid first");
+  // A time series is held whole when every timepoint fits the budget unshrunk;
+  // otherwise timepoint 0 alone (and the user is told how to play the rest).
+  const bool series = info.timepoints > 1 && bytes <= max_bytes / info.timepoints &&
+                      std::max({info.dims[0], info.dims[1], info.dims[2]}) <= max_dim;
+  if (info.timepoints > 1 && !series)
+    out.notes.push_back("showing timepoint 0 of " + std::to_string(info.timepoints) +
+                        " (the series is too large to hold in memory; import it to a .vxc to play every timepoint)");
+  for (uint32_t t = 1; series && t < info.timepoints; ++t) {
+    std::vector<DenseVolume> volumes;
+    for (uint32_t c = 0; c < channels; ++c) {
+      DenseVolume v;
+      v.dims = {static_cast<uint32_t>(info.dims[0]), static_cast<uint32_t>(info.dims[1]),
+                static_cast<uint32_t>(info.dims[2])};
+      v.dtype = info.dtype;
+      v.voxel_size = info.voxel_size;
+      v.unit = info.unit;
+      v.data.resize(v.byte_size());
+      VXR_RETURN_IF_ERROR(src->read_region(c, t, Box3{{0, 0, 0}, info.dims}, v.data));
+      volumes.push_back(std::move(v));
+    }
+    out.later_timepoints.push_back(std::move(volumes));
+  }
   for (uint32_t c = 0; c < channels; ++c) {
     DenseVolume v;
     v.dims = {static_cast<uint32_t>(info.dims[0]), static_cast<uint32_t>(info.dims[1]),

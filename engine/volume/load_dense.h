@@ -15,6 +15,9 @@ namespace vxr {
 
 struct LoadedVolume {
   std::vector<DenseVolume> channels;  // timepoint 0, 1..4 channels
+  // Timepoints 1.. of a time series (each as `channels`), when the whole
+  // series fits the per-channel byte budget; else empty (timepoint 0 only).
+  std::vector<std::vector<DenseVolume>> later_timepoints;
   uint32_t shrink = 1;                // 1, 2, 4, ...: how much was averaged away to fit
   std::string format;                 // what read it
   std::vector<std::string> notes;     // warnings worth showing

@@ -76,6 +76,7 @@ PlaybackFrame PlaybackClock::tick(double now, const std::function<bool(uint32_t)
     frame.is_new = true;
     ++counters_.shown;
     if (playing_) anchor(now);
+    if (!options_.loop && current_ + 1 >= count_) playing_ = false;  // the last (or only) timepoint
     return frame;
   }
   if (!playing_) return frame;
@@ -116,7 +117,9 @@ PlaybackFrame PlaybackClock::tick(double now, const std::function<bool(uint32_t)
 std::vector<uint32_t> PlaybackClock::upcoming(uint32_t count) const {
   std::vector<uint32_t> out;
   if (!current_shown_) out.push_back(current_);
-  uint64_t position = shown_position_;
+  // Waiting on a due timepoint: it comes first (the ones before it will be
+  // dropped); listing from the shown one would never load it.
+  uint64_t position = waiting_ && anchor_position_ > shown_position_ ? anchor_position_ - 1 : shown_position_;
   while (out.size() < count) {
     ++position;
     if (!options_.loop && position >= count_) break;

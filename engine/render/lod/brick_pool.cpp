@@ -1,9 +1,11 @@
 #include "render/lod/brick_pool.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 #include <limits>
 #include <string>
+#include <thread>
 
 #include "core/trace.h"
 #include "shared/raycast_params.h"
@@ -427,6 +429,7 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
                                      const ReadChunk& fetch, std::vector<std::vector<VkBufferImageCopy>>& regions) {
   regions.assign(atlases_.size(), {});  // per atlas
   UploadStats st;
+  std::vector<DeferredWrite> writes;
   uint64_t ring = 0;
   for (ChunkKey key : requests) {
     key.channel = 0;
@@ -472,11 +475,13 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
       r.imageExtent = {edge_, edge_, edge_};
       regions[c].push_back(r);
     }
-    const VkFormat format = atlases_[0].format;
     for (uint32_t c = 0; c < channels(); ++c) {
-      compute_cell_ranges(format, texels[c], src_.chunk_size(), apron_, cells_,
-                          static_cast<glm::vec2*>(cell_ranges_.mapped) + (size_t(*slot) * channels() + c) * cells_.count());
-      if (direct_) write_slot(c, *slot, texels[c]);
+      if (direct_ && keep[c]) {
+        // The texels are the chunk's own bytes (kept alive here): write them later, in parallel.
+        writes.push_back({*slot, c, texels[c], std::move(keep[c])});
+      } else {
+        write_brick_channel(*slot, c, texels[c]);
+      }
     }
     if (!direct_) ring += (brick_bytes_ + 15) & ~uint64_t(15);
     slot_[*slot] = {key, frame_, false, true};
@@ -484,7 +489,30 @@ Result<UploadStats> BrickPool::stage(const std::vector<ChunkKey>& requests, uint
     ++st.bricks;
     st.bytes += brick_bytes_;
   }
+  write_in_parallel(writes);
   return st;
+}
+
+void BrickPool::write_brick_channel(uint32_t slot, uint32_t c, const uint8_t* texels) {
+  compute_cell_ranges(atlases_[0].format, texels, src_.chunk_size(), apron_, cells_,
+                      static_cast<glm::vec2*>(cell_ranges_.mapped) + (size_t(slot) * channels() + c) * cells_.count());
+  if (direct_) write_slot(c, slot, texels);
+}
+
+void BrickPool::write_in_parallel(const std::vector<DeferredWrite>& writes) {
+  // Slots are disjoint, so bricks are written (and their cells computed) by
+  // up to hardware_concurrency threads; the calling thread takes a share.
+  // On lavapipe this copy and the cell scan were most of a movie's upload.
+  const size_t threads = std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), writes.size() / 8 + 1);
+  std::atomic<size_t> next{0};
+  auto work = [&] {
+    for (size_t i; (i = next.fetch_add(1)) < writes.size();)
+      write_brick_channel(writes[i].slot, writes[i].channel, writes[i].texels);
+  };
+  std::vector<std::thread> helpers;
+  for (size_t t = 1; t < threads; ++t) helpers.emplace_back(work);
+  work();
+  for (auto& h : helpers) h.join();
 }
 
 void BrickPool::write_slot(uint32_t c, uint32_t slot, const uint8_t* texels) {

@@ -212,6 +212,15 @@ class BrickPool {
                             std::vector<std::vector<VkBufferImageCopy>>& regions);
   void record_copies(VkCommandBuffer cmd, const std::vector<std::vector<VkBufferImageCopy>>& regions);
   // Direct writes: one channel's slot texels (edge^3, packed) into its slot of atlas c.
+  // A brick channel whose texels are a chunk's bytes, written after stage()'s loop.
+  struct DeferredWrite {
+    uint32_t slot, channel;
+    const uint8_t* texels;
+    std::shared_ptr<const Chunk> keep;
+  };
+  // compute_cell_ranges for the slot's channel, and (direct writes) its texels into the atlas.
+  void write_brick_channel(uint32_t slot, uint32_t c, const uint8_t* texels);
+  void write_in_parallel(const std::vector<DeferredWrite>& writes);
   void write_slot(uint32_t c, uint32_t slot, const uint8_t* texels);
   glm::uvec3 slot_origin(uint32_t slot) const;
 
