@@ -25,6 +25,7 @@
 #include "core/image.h"
 #include "core/log.h"
 #include "core/output_file.h"
+#include "render/movie_player.h"
 #include "gpu/vk_check.h"
 #include "xr/desktop/imgui_layer.h"
 #include "xr/desktop/viewer_keys.h"
@@ -59,6 +60,7 @@ Status init_glfw() {
 DesktopTarget* self(GLFWwindow* w) { return static_cast<DesktopTarget*>(glfwGetWindowUserPointer(w)); }
 
 double g_last_x = 0, g_last_y = 0;
+constexpr uint32_t kPrefetchAhead = 4;  // timepoints decoded ahead of the shown one (MoviePlayerOptions::prefetch)
 
 }  // namespace
 
@@ -537,17 +539,15 @@ Status DesktopTarget::screenshot() {
 void DesktopTarget::use_chunk_cache(ChunkCache* cache, const ChunkSource* source) {
   prefetch_.clear();
   if (!state_ || !cache || !source || state_->timepoints() < 2) return;
-  // The finest level at which a few timepoints of every drawn channel fit the prefetch share of the
-  // cache; with none, playback shows what the renderer has streamed (as `vxr play`).
-  const uint32_t channels = uint32_t(std::min<size_t>(state_->channel_count(), source->info().channels));
-  const double share = 0.5 / std::max(1u, channels);
-  for (uint32_t level = 0; level < source->levels().size() && prefetch_.empty(); ++level) {
-    const TimepointPrefetcher probe(*cache, *source, level, 0, share);
-    if (double(probe.bytes_per_timepoint()) * 4.0 > double(cache->budget_bytes()) * share) continue;
-    for (uint32_t c = 0; c < channels; ++c) prefetch_.emplace_back(*cache, *source, level, c, share);
-    log_info("viewer: playback prefetches level " + std::to_string(level) + " of " + std::to_string(channels) +
-             " channel(s), " + std::to_string(probe.bytes_per_timepoint() >> 10) + " KiB per timepoint and channel");
-  }
+  // MoviePlayer's policy (render/movie_player.h, what `vxr play` uses): prefetch gets half the cache, split
+  // over the drawn channels; the level is the finest where the shown timepoint and kPrefetchAhead more fit.
+  const uint32_t channels = uint32_t(std::clamp<size_t>(state_->channel_count(), 1, source->info().channels));
+  const uint64_t per_timepoint = cache->budget_bytes() / 2 / (kPrefetchAhead + 1) / channels;
+  const uint32_t level = finest_level_within(*source, per_timepoint);
+  for (uint32_t c = 0; c < channels; ++c) prefetch_.emplace_back(*cache, *source, level, c, 0.5 / channels);
+  log_info("viewer: playback prefetches level " + std::to_string(level) + " of " + std::to_string(channels) +
+           " channel(s), " + std::to_string(prefetch_.front().bytes_per_timepoint() >> 10) +
+           " KiB per timepoint and channel");
 }
 
 CameraState viewer_world_camera(const ViewerState& state, const VolumePlacement& placement) {
@@ -584,7 +584,7 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   screenshot_pending_.clear();
   // Playback as volume/playback.h shows it: the next timepoints queued, a due one shown once loaded.
   if (state_->playback().playing())
-    for (TimepointPrefetcher& p : prefetch_) p.update(state_->playback().upcoming(8));
+    for (TimepointPrefetcher& p : prefetch_) p.update(state_->playback().upcoming(kPrefetchAhead + 1));
   state_->tick(std::chrono::duration<double>(now.time_since_epoch()).count(),  // any origin will do
                [this](uint32_t t) {
                  return std::all_of(prefetch_.begin(), prefetch_.end(),
