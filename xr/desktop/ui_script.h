@@ -4,7 +4,8 @@
 //
 //   any viewer command        "colormap 0 viridis", "window 0 10 200", "visible 1 off",
 //                             "model mip", "step 0.5", "time 2", "orbit 40 0", "zoom 2",
-//                             "reset", "view 3" (ViewerState::apply_command)
+//                             "reset", "view 3", "play", "pause", "speed 0.5", "loop on"
+//                             (ViewerState::apply_command)
 //   ui on|off                 show or hide the panels
 //   wait N                    render N more frames first
 //   resize W H                the window to W x H pixels (the viewer follows it and remembers it)
