@@ -440,3 +440,24 @@ TEST_CASE("desktop viewer: the panel histogram counts every interior voxel once"
   CHECK(coarse_total == doctest::Approx(double(fit->dims[0] * fit->dims[1] * fit->dims[2])).epsilon(1e-5));
   CHECK_FALSE(xr::coarse_histogram(**source, 0, 0, {5.0, 5.0}).is_ok());
 }
+
+TEST_CASE("vxr bench desktop: the window's frame times while a volume streams in, split at full detail") {
+  const std::string dir = test::xr_out_dir("bench_desktop");
+  const test::ChildResult r = test::run_child("xvfb-run -a -s '-screen 0 1024x768x24' " + std::string(VXR_BINARY) +
+                                              " bench desktop procedural:vessels:4096 --frames 12 --width 160 "
+                                              "--height 120 --out " + dir);
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  std::ifstream in(dir + "/desktop.json");
+  const nlohmann::json doc = nlohmann::json::parse(in);
+  CHECK(doc["frames"].get<uint64_t>() == 12);
+  CHECK(doc["bricks_uploaded"].get<uint64_t>() > 0);
+  CHECK(doc["target"].get<std::string>().find("desktop window 160x120") != std::string::npos);
+  // A cold cache: the first frames draw ancestors while bricks stream in, then full detail.
+  REQUIRE(doc["full_detail_at_frame"].is_number());
+  const uint64_t full = doc["full_detail_at_frame"].get<uint64_t>();
+  CHECK(doc["first_frame_missing_bricks"].get<uint64_t>() > 0);
+  CHECK(doc["streaming"]["frames"].get<uint64_t>() == full - 1);
+  CHECK(doc["settled"]["frames"].get<uint64_t>() == 12 - full);
+  CHECK(doc["settled"]["interval_ms"]["p50"].get<double>() > 0.0);
+}

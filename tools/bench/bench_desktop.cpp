@@ -114,6 +114,7 @@ int run(const Options& o) {
                         {"cache_mb", o.cache_mb},
                         {"bricks_uploaded", stats->bricks_uploaded},
                         {"first_frame_ms", n ? interval_ms[0] : 0.0},
+                        {"first_frame_missing_bricks", stats->frame_missing.empty() ? 0 : stats->frame_missing[0]},
                         {"full_detail_at_frame", full < n ? nlohmann::json(full) : nlohmann::json(nullptr)}};
   if (n > 1) doc["streaming"] = phase(interval_ms, stats->frame_ms, 1, std::max<size_t>(full, 1));
   if (full < n) doc["settled"] = phase(interval_ms, stats->frame_ms, full, n);
