@@ -35,6 +35,9 @@ for name in "${names[@]}"; do
   findings="build/fuzz/findings/${name}"
   mkdir -p "$grown" "$findings"
   log="build/fuzz/findings/${name}.log"
+  # Count only what this run finds (earlier findings stay for inspection).
+  stamp="$findings/.run-start"
+  touch "$stamp"
   # One process, one job (the CI machine is shared); the first finding stops the run.
   set +e
   "$bin" "$grown" "tests/fuzz/corpus/${name}" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 \
@@ -43,9 +46,9 @@ for name in "${names[@]}"; do
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
   corpus=$(find "$grown" "tests/fuzz/corpus/${name}" -type f | wc -l)
-  crashes=$(find "$findings" -name 'crash-*' -o -name 'leak-*' | wc -l)
-  ooms=$(find "$findings" -name 'oom-*' | wc -l)
-  timeouts=$(find "$findings" -name 'timeout-*' -o -name 'slow-unit-*' | wc -l)
+  crashes=$(find "$findings" -newer "$stamp" \( -name 'crash-*' -o -name 'leak-*' \) | wc -l)
+  ooms=$(find "$findings" -newer "$stamp" -name 'oom-*' | wc -l)
+  timeouts=$(find "$findings" -newer "$stamp" \( -name 'timeout-*' -o -name 'slow-unit-*' \) | wc -l)
   printf '%-12s %12s %8s %8s %8s %6s %9s\n' "$name" "${execs:-?}" "${rate:-?}" "$corpus" "$crashes" "$ooms" "$timeouts"
   if (( crashes + ooms + timeouts > 0 )) || [[ -z "$execs" ]]; then
     failed=1

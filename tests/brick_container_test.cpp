@@ -5,6 +5,7 @@
 // cover every payload voxel (interior and apron): a brick whose samples can
 // filter apron voxels is only skipped when the apron maps to zero opacity too.
 #include <doctest/doctest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -26,13 +27,17 @@ const std::string& mri_container() {
   static const std::string path = [] {
     const std::string out = std::string(VXR_TEST_OUT_DIR) + "/brick_container_mri16.vxc";
     std::filesystem::create_directories(VXR_TEST_OUT_DIR);
-    std::filesystem::remove(out);
+    // ctest runs test cases as parallel processes that share this file: build
+    // under a name of this process, then rename over (readers keep the old one).
+    const std::string tmp = out + "." + std::to_string(getpid()) + ".tmp";
+    std::filesystem::remove(tmp);
     auto src = open_import_source({std::string(VXR_TESTDATA_DIR) + "/slices/mri-stack"});
     REQUIRE(src.is_ok());
     ImportOptions opt;
     opt.chunk_size = 16;
     opt.apron = 1;
-    REQUIRE(build_container(**src, out, opt).is_ok());
+    REQUIRE(build_container(**src, tmp, opt).is_ok());
+    std::filesystem::rename(tmp, out);
     return out;
   }();
   return path;

@@ -101,22 +101,8 @@ Result<LoadedVolume> load_for_render(const std::string& path, uint32_t max_dim, 
   if (info.timepoints > 1 && !series)
     out.notes.push_back("showing timepoint 0 of " + std::to_string(info.timepoints) +
                         " (the series is too large to hold in memory; import it to a .vxc to play every timepoint)");
-  for (uint32_t t = 1; series && t < info.timepoints; ++t) {
-    std::vector<DenseVolume> volumes;
-    for (uint32_t c = 0; c < channels; ++c) {
-      DenseVolume v;
-      v.dims = {static_cast<uint32_t>(info.dims[0]), static_cast<uint32_t>(info.dims[1]),
-                static_cast<uint32_t>(info.dims[2])};
-      v.dtype = info.dtype;
-      v.voxel_size = info.voxel_size;
-      v.unit = info.unit;
-      v.data.resize(v.byte_size());
-      VXR_RETURN_IF_ERROR(src->read_region(c, t, Box3{{0, 0, 0}, info.dims}, v.data));
-      volumes.push_back(std::move(v));
-    }
-    out.later_timepoints.push_back(std::move(volumes));
-  }
-  for (uint32_t c = 0; c < channels; ++c) {
+  // One channel of one timepoint, whole.
+  auto read_volume = [&](uint32_t c, uint32_t t) -> Result<DenseVolume> {
     DenseVolume v;
     v.dims = {static_cast<uint32_t>(info.dims[0]), static_cast<uint32_t>(info.dims[1]),
               static_cast<uint32_t>(info.dims[2])};
@@ -124,8 +110,19 @@ Result<LoadedVolume> load_for_render(const std::string& path, uint32_t max_dim, 
     v.voxel_size = info.voxel_size;
     v.unit = info.unit;
     v.data.resize(v.byte_size());
-    Box3 box{{0, 0, 0}, info.dims};
-    VXR_RETURN_IF_ERROR(src->read_region(c, 0, box, v.data));
+    VXR_RETURN_IF_ERROR(src->read_region(c, t, Box3{{0, 0, 0}, info.dims}, v.data));
+    return v;
+  };
+  for (uint32_t t = 1; series && t < info.timepoints; ++t) {
+    std::vector<DenseVolume> volumes;
+    for (uint32_t c = 0; c < channels; ++c) {
+      VXR_ASSIGN_OR_RETURN(DenseVolume v, read_volume(c, t));
+      volumes.push_back(std::move(v));
+    }
+    out.later_timepoints.push_back(std::move(volumes));
+  }
+  for (uint32_t c = 0; c < channels; ++c) {
+    VXR_ASSIGN_OR_RETURN(DenseVolume v, read_volume(c, 0));
     uint32_t shrink = 1;
     while (std::max({v.dims[0], v.dims[1], v.dims[2]}) > max_dim || v.byte_size() > max_bytes) {
       v = shrink_by_two(v);
