@@ -176,7 +176,7 @@ TEST_CASE("desktop viewer: a scripted session under Xvfb shows each change in it
   CHECK(card->snapshot_png == marked_bytes);
 }
 
-TEST_CASE("desktop viewer: clicks with the count and measure tools place where the window shows them") {
+TEST_CASE("desktop viewer: tool clicks place where the window shows them, and a panel card brings its view back") {
   const std::string dir = test::xr_out_dir("desktop_ui_tools");
   auto shot = [&](const std::string& name) { return dir + "/" + name + ".png"; };
   const std::string script = dir + "/tools.json";
@@ -192,6 +192,13 @@ TEST_CASE("desktop viewer: clicks with the count and measure tools place where t
                                "click 160 280",
                                "click 320 280",
                                "screenshot " + shot("clicked"),
+                               // The panel's card buttons: save this view, change it, restore the card.
+                               "panel-card marked view",
+                               "colormap 0 viridis",
+                               "orbit 80 30",
+                               "screenshot " + shot("changed"),
+                               "restore-card 1",
+                               "screenshot " + shot("restored"),
                            })
                                .dump(1);
   const std::string store_dir = dir + "/store";
@@ -258,6 +265,34 @@ TEST_CASE("desktop viewer: clicks with the count and measure tools place where t
       white_on_row += p[0] == 255 && p[1] == 255 && p[2] == 255;
     }
   CHECK(white_on_row >= 120);  // a 2-pixel line: at least one white pixel per column
+
+  // The panel's card holds that frame's picture (the clicked view) and its scene; restoring it
+  // brings back the colour map and the camera: the window shows the marked view again.
+  auto cards = (*store)->cards();
+  REQUIRE(cards.is_ok());
+  REQUIRE(cards->size() == 1);
+  CHECK(cards->front().id == 1);
+  auto card = (*store)->card(1, true);
+  REQUIRE(card.is_ok());
+  CHECK(card->title == "marked view");
+  CHECK(card->scene_json.find("viridis") == std::string::npos);
+  const std::string card_png = dir + "/card.png";
+  std::ofstream(card_png, std::ios::binary).write(reinterpret_cast<const char*>(card->snapshot_png.data()),
+                                                  std::streamsize(card->snapshot_png.size()));
+  auto card_image = read_png(card_png);
+  REQUIRE(card_image.is_ok());
+  CHECK(differing(*card_image, *clicked, 0, 0, kWidth, kHeight) == 0);
+  auto changed = read_png(shot("changed"));
+  auto restored = read_png(shot("restored"));
+  REQUIRE(changed.is_ok());
+  REQUIRE(restored.is_ok());
+  const size_t elsewhere = differing(*changed, *clicked, 0, 0, kWidth, kHeight);
+  const size_t back = differing(*restored, *clicked, 0, 0, kWidth, kHeight);
+  MESSAGE("pixels differing from the card's view: changed " << elsewhere << ", restored " << back);
+  CHECK(elsewhere > kWidth * kHeight / 10);
+  CHECK(back < kWidth * kHeight / 1000);  // the orbit comes back from the card's camera to rounding
+  for (const auto& entry : std::filesystem::directory_iterator(store_dir))  // the picture's scratch file is gone
+    CHECK(entry.path().filename().string().find("card-snapshot") == std::string::npos);
 }
 
 TEST_CASE("desktop viewer: playback of the 7-timepoint OME-TIFF shows the timepoints in order, then pauses") {
@@ -355,6 +390,7 @@ TEST_CASE("desktop viewer: a bad UI script is one line naming the file and the s
       {nlohmann::json::array({"count 1 2 3"}), "step 1 ('count 1 2 3'): needs an annotation store"},
       {nlohmann::json::array({"wait 1", "tool paint"}), "step 2 ('tool paint'): usage: tool navigate|count"},
       {nlohmann::json::array({"click 5"}), "step 1 ('click 5'): usage: click X Y"},
+      {nlohmann::json::array({"restore-card 0"}), "step 1 ('restore-card 0'): usage: restore-card ID"},
       {nlohmann::json::array({"wait 1", "play"}), "step 2 ('play'): one timepoint: nothing to play"},
       {nlohmann::json::array({"wait 1", "window 0 50 10"}), "step 2 ('window 0 50 10'): "},
       {nlohmann::json::array({"screenshot " + kMri}), "step 1 ('screenshot "},

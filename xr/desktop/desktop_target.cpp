@@ -590,6 +590,8 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
                  return std::all_of(prefetch_.begin(), prefetch_.end(),
                                     [t](const TimepointPrefetcher& p) { return p.ready(t); });
                });
+  bool script_card = false;  // the script pressed the tools panel's buttons
+  std::optional<uint64_t> script_restore;
   if (script_) {
     VXR_ASSIGN_OR_RETURN(UiScriptRunner::FrameWork work, script_->before_frame(*state_));
     if (work.done) {
@@ -607,6 +609,9 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
                                          : ToolPanel::Mode::kNavigate;
       if (name == "count") std::snprintf(panel_->cls, sizeof panel_->cls, "%s", work.tool.substr(6).c_str());
     }
+    if (work.panel_card) std::snprintf(panel_->card_title, sizeof panel_->card_title, "%s", work.panel_card->c_str());
+    script_card = work.panel_card.has_value();
+    script_restore = work.restore_card;
     if (work.click) {
       on_viewer_click((*work.click)[0], (*work.click)[1]);
       // A script stops at the first refused click, as at any refused step.
@@ -626,9 +631,20 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   in.frame_ms = frame_ms_;
   in.histograms = setup.histograms;
   draw_viewer_panels(*state_, in);
-  if (tools_ && state_->ui_visible()) {
-    draw_tools_panel(*tools_, *panel_);
-    if (panel_->restore) restore_card(*panel_->restore);
+  if (tools_) {
+    if (state_->ui_visible()) {
+      draw_tools_panel(*tools_, *panel_);  // sets save_card / restore from its buttons
+    } else {
+      panel_->save_card = false;
+      panel_->restore.reset();
+    }
+    if (script_card) panel_->save_card = true;
+    if (script_restore) panel_->restore = script_restore;
+    if (panel_->restore) {
+      const Status s = restore_card(*panel_->restore);
+      panel_->message = s ? "card " + std::to_string(*panel_->restore) + " shown" : s.message();
+      if (!s && script_restore) return invalid_argument(o_.viewer->script->path + ": restore-card: " + s.message());
+    }
     // The card takes this frame's picture: read back with the frame, stored in end_frame.
     if (panel_->save_card) {
       if (screenshot_pending_.empty()) {
@@ -773,24 +789,17 @@ Status DesktopTarget::save_panel_card(const std::string& png_path) {
 }
 
 // Shows a card's scene: its settings and timepoint, and the orbit that sees its camera.
-void DesktopTarget::restore_card(uint64_t id) {
-  auto card = tools_->store().card(id, false);
-  if (!card) {
-    panel_->message = card.status().message();
-    return;
-  }
-  auto scene = scene_from_json(card->scene_json);
-  if (!scene) {
-    panel_->message = "card " + std::to_string(id) + ": " + scene.status().message();
-    return;
-  }
+Status DesktopTarget::restore_card(uint64_t id) {
+  VXR_ASSIGN_OR_RETURN(annotate::Card card, tools_->store().card(id, false));
+  auto scene = scene_from_json(card.scene_json);
+  if (!scene) return Status(scene.status().code(), "card " + std::to_string(id) + ": " + scene.status().message());
   OrbitCamera orbit = state_->orbit();
   if (scene->has_camera) {
     const glm::dvec3 e = o_.viewer->placement.extent();
     orbit = orbit_for_camera(scene->camera, std::max({e.x, e.y, e.z}));
   }
   const Status s = state_->restore(scene->render, scene->timepoint, orbit);
-  panel_->message = s ? "card " + std::to_string(id) + " shown" : "card " + std::to_string(id) + ": " + s.message();
+  return s ? s : Status(s.code(), "card " + std::to_string(id) + ": " + s.message());
 }
 
 Status DesktopTarget::record_after_views(VkCommandBuffer cmd, FrameSubmit& submit) {

@@ -110,7 +110,7 @@ class DesktopTarget : public FrameTarget {
   std::array<double, 3> voxel_under(double x, double y) const;
   Scene card_scene() const;
   Status save_panel_card(const std::string& png_path);
-  void restore_card(uint64_t id);
+  Status restore_card(uint64_t id);
 
   DesktopOptions o_;
   GLFWwindow* window_ = nullptr;

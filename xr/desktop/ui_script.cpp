@@ -54,6 +54,15 @@ Result<UiStep> parse_step(const std::string& text) {
       return invalid_argument("usage: tool navigate|count [CLASS]|measure");
     step.kind = UiStepKind::kTool;
     step.arg = w[1] + (w.size() == 3 ? " " + w[2] : w[1] == "count" ? " default" : "");
+  } else if (cmd == "panel-card") {
+    if (w.size() < 2) return invalid_argument("usage: panel-card TITLE");
+    step.kind = UiStepKind::kPanelCard;
+    step.arg = text.substr(text.find("panel-card") + 10);
+    step.arg.erase(0, step.arg.find_first_not_of(" \t"));
+  } else if (cmd == "restore-card") {
+    if (w.size() != 2 || !parse_number(w[1], &step.xyz[0]) || step.xyz[0] < 1 || step.xyz[0] != std::floor(step.xyz[0]))
+      return invalid_argument("usage: restore-card ID");
+    step.kind = UiStepKind::kRestoreCard;
   } else if (cmd == "click") {
     if (w.size() != 3 || !parse_number(w[1], &step.xyz[0]) || !parse_number(w[2], &step.xyz[1]) || step.xyz[0] < 0 ||
         step.xyz[1] < 0)
@@ -132,6 +141,8 @@ Result<UiScript> load_ui_script(const std::string& path, const ViewerState& stat
       case UiStepKind::kCard:
       case UiStepKind::kTool:
       case UiStepKind::kClick:
+      case UiStepKind::kPanelCard:
+      case UiStepKind::kRestoreCard:
         if (!have_store) return script.step_error(i, "needs an annotation store (--annotations STORE)");
         break;
       case UiStepKind::kUi:
@@ -172,6 +183,14 @@ Result<UiScriptRunner::FrameWork> UiScriptRunner::before_frame(ViewerState& stat
       work.tool = step.arg;
       continue;
     }
+    if (step.kind == UiStepKind::kRestoreCard) {
+      work.restore_card = uint64_t(step.xyz[0]);
+      continue;
+    }
+    if (step.kind == UiStepKind::kPanelCard) {  // the picture is this frame's
+      work.panel_card = step.arg;
+      return work;
+    }
     // One click a frame, seen through that frame's camera.
     if (step.kind == UiStepKind::kClick) {
       work.click = std::array<double, 2>{step.xyz[0], step.xyz[1]};
@@ -209,7 +228,9 @@ Status UiScriptRunner::run_step(const UiStep& step, ViewerState& state) {
     case UiStepKind::kWait:
     case UiStepKind::kResize:
     case UiStepKind::kTool:
-    case UiStepKind::kClick: break;
+    case UiStepKind::kClick:
+    case UiStepKind::kPanelCard:
+    case UiStepKind::kRestoreCard: break;
   }
   return Status::ok();
 }

@@ -16,6 +16,8 @@
 //   tool navigate|count [CLASS]|measure   the tools panel's tool (as if picked there)
 //   click X Y                 a left click at window pixel (X, Y), as the mouse would
 //                             (count: a marker; measure: an end point)
+//   panel-card TITLE...       the tools panel's "save card": this frame's picture and scene
+//   restore-card ID           the tools panel's "restore" of card ID
 //
 // The whole script is checked before the window opens: a bad step is one line
 // naming the file, the step number and the problem.
@@ -33,7 +35,7 @@
 
 namespace vxr::xr {
 
-enum class UiStepKind { kViewer, kUi, kWait, kResize, kScreenshot, kCount, kMeasure, kCard, kTool, kClick };
+enum class UiStepKind { kViewer, kUi, kWait, kResize, kScreenshot, kCount, kMeasure, kCard, kTool, kClick, kPanelCard, kRestoreCard };
 
 struct UiStep {
   UiStepKind kind = UiStepKind::kViewer;
@@ -72,6 +74,8 @@ class UiScriptRunner {
     bool done = false;                // every step ran: close the window
     std::string tool;                 // non-empty: the tools panel switches to it ("navigate", "count CLASS", "measure")
     std::optional<std::array<double, 2>> click;  // a left click at this window pixel (as the mouse would)
+    std::optional<std::string> panel_card;       // "save card" in the tools panel, with this title
+    std::optional<uint64_t> restore_card;        // "restore" of this card in the tools panel
   };
   // Applies the steps due before this frame (state edits, tool events).
   Result<FrameWork> before_frame(ViewerState& state);
