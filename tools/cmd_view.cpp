@@ -270,8 +270,8 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--fps", o->fps, "--movie: frames per second (default 30)")->check(CLI::Range(0.001, 1000.0));
   cmd->add_flag("--no-ui", o->no_ui, "desktop: the bare window, without panels");
   cmd->add_option("--ui-script", o->ui_script,
-                  "desktop: run this scripted session (JSON list of steps: viewer commands, screenshot PATH, count, "
-                  "measure, card; see xr/desktop/ui_script.h), then close");
+                  "desktop: run this scripted session (JSON list of steps: viewer commands, play/pause, screenshot "
+                  "PATH, count, measure, tool, click, card; see xr/desktop/ui_script.h), then close");
   cmd->add_option("--annotations", o->annotations,
                   "desktop: annotation store (folder, created if missing) for markers, measurements and cards");
   cmd->add_option("--colormap", o->flags.colormap, "colormap name (default hot)");
