@@ -38,6 +38,11 @@ layout(std430, binding = 6) readonly buffer Items { uvec4 items[]; };  // x: bri
 layout(std140, binding = 7) uniform Params { RaycastParams P; };
 // Per atlas slot and channel, (min, max) texel value of each empty-space cell (BrickPool cell ranges).
 layout(std430, binding = 8) readonly buffer Cells { vec2 cell_range[]; };
+// The underlay (VXR_BRICK_UNDERLAY; engine/render/volume_renderer.h
+// ViewUnderlay): annotations drawn first, at the view's full size. Rays end at
+// its view depth; its premultiplied colour goes under the volume.
+layout(binding = 9, r32f) uniform readonly image2D under_depth;
+layout(binding = 10, rgba8) uniform readonly image2D under_color;
 
 layout(push_constant) uniform Push { BrickCastParams p; };
 
@@ -50,6 +55,8 @@ vec3 g_dir;
 
 // The brick being marched: vxr_sample reads its atlas slot.
 vec3 g_atlas_origin;
+// Where the ray ends (t units): the underlay's depth, +inf without one.
+float g_t_limit = 1.0 / 0.0;
 
 vec4 vxr_sample(vec3 pos) {
   const vec3 uvw = (g_atlas_origin + pos) * p.atlas_inv.xyz;
@@ -185,7 +192,7 @@ bool segment(uint b, vec3 dir, out float t0, out float t1) {
   const vec3 tb = (bricks[b].box_hi.xyz - e) * inv;
   const vec3 tmin = min(ta, tb), tmax = max(ta, tb);
   t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
-  t1 = min(min(tmax.x, tmax.y), tmax.z);
+  t1 = min(min(min(tmax.x, tmax.y), tmax.z), g_t_limit);
   const vec4 pl = bricks[b].plane;
   if (pl.xyz != vec3(0.0)) {
     const float num = dot(pl.xyz, e) + pl.w, den = dot(pl.xyz, dl);
@@ -220,14 +227,21 @@ void main() {
   if (pix.x >= width || pix.y >= height) return;
 
   vec2 ndc = (vec2(pix) + 0.5) / vec2(width, height) * 2.0 - 1.0;
+  ivec2 full_pix = ivec2(pix);  // the pixel of the full image the ray goes through (the underlay's)
   if (p.warp.z > 1u) {
     const vec2 n = vec2(width, height), e = vec2(p.warp.xy);
     const float s = float(p.warp.z);
     const vec2 full = n + 2.0 * e * (s - 1.0);
-    ndc = vec2(unwarp(float(pix.x) + 0.5, e.x, n.x, s), unwarp(float(pix.y) + 0.5, e.y, n.y, s)) / full * 2.0 - 1.0;
+    const vec2 q = vec2(unwarp(float(pix.x) + 0.5, e.x, n.x, s), unwarp(float(pix.y) + 0.5, e.y, n.y, s));
+    ndc = q / full * 2.0 - 1.0;
+    full_pix = ivec2(floor(q));
   }
-  vec3 dir = normalize(P.forward.xyz + ndc.x * P.right.xyz - ndc.y * P.up.xyz);
+  const vec3 raw_dir = P.forward.xyz + ndc.x * P.right.xyz - ndc.y * P.up.xyz;
+  vec3 dir = normalize(raw_dir);
   g_dir = dir;
+  const bool underlay = (flags & VXR_BRICK_UNDERLAY) != 0u;
+  // A view depth z lies at t = z * |raw_dir| (raw_dir has unit view depth), as in vxr_cast.
+  if (underlay) g_t_limit = imageLoad(under_depth, full_pix).r * length(raw_dir);
 
   float t0, t1;
   // A work item's pixel that misses its brick leaves the accumulation alone.
@@ -289,6 +303,8 @@ void main() {
   if ((flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), pack_ray(ray));
   if ((flags & VXR_BRICK_STORE_FINAL) != 0u) {
     vec4 c = finish_ray(ray);
+    // The underlay under the volume (premultiplied): composite_volume_over's rule.
+    if (underlay) c += (1.0 - clamp(c.a, 0.0, 1.0)) * imageLoad(under_color, full_pix);
     if ((flags & VXR_BRICK_OPAQUE) != 0u) c.a = 1.0;  // premultiplied over black
     // k / 255 converts to byte k under any rounding the conversion uses.
     if ((flags & VXR_BRICK_QUANTIZE) != 0u) c = floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5) / 255.0;

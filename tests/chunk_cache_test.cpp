@@ -252,3 +252,26 @@ TEST_CASE("chunk buffers: a dropped chunk's buffer is handed to the next chunk o
   // Another size is never served from it.
   CHECK(vxr::take_chunk_buffer(bytes + 1).size() == bytes + 1);
 }
+
+TEST_CASE("chunk cache: get_or_load waits for a load in flight and takes over a queued one (each chunk read once)") {
+  auto src = std::make_shared<FakeSource>();
+  ChunkCache cache(src, {.budget_bytes = budget_for(10), .loader_threads = 1});
+  src->close_gate();
+  cache.request(key(1), 1);
+  while (cache.queued() != 0) std::this_thread::yield();  // the loader took chunk 1 (held at the gate)
+  cache.request(key(2), 0);                                // queued behind it
+  Result<std::shared_ptr<const Chunk>> r1 = internal_error("not run"), r2 = internal_error("not run");
+  std::thread waits([&] { r1 = cache.get_or_load(key(1)); });     // in flight: must wait for it
+  std::thread takes_over([&] { r2 = cache.get_or_load(key(2)); });  // queued: loads it itself
+  while (cache.queued() != 0) std::this_thread::yield();
+  src->open_gate();
+  waits.join();
+  takes_over.join();
+  cache.wait_idle();
+  REQUIRE(r1.is_ok());
+  REQUIRE(r2.is_ok());
+  CHECK((*r1)->data[0] == 1);
+  CHECK((*r2)->data[0] == 2);
+  CHECK(src->reads_.load() == 2);
+  CHECK(cache.counters().loads == 2);
+}

@@ -104,6 +104,8 @@ TEST_CASE("desktop viewer: a scripted session under Xvfb shows each change in it
                            })
                                .dump(1);
   const std::string store_dir = dir + "/store";
+  std::filesystem::remove_all(store_dir);
+  REQUIRE(annotate::AnnotationStore::open(store_dir, true).is_ok());  // vxr view draws an existing store
   const test::ChildResult r = test::run_child(viewer_command(script, "--annotations " + store_dir));
   INFO(r.output);
   REQUIRE(r.exit_code == 0);  // validation is on: any Vulkan message would exit 3
@@ -203,6 +205,7 @@ TEST_CASE("desktop viewer: tool clicks place where the window shows them, and a 
                                .dump(1);
   const std::string store_dir = dir + "/store";
   std::filesystem::remove_all(store_dir);
+  REQUIRE(annotate::AnnotationStore::open(store_dir, true).is_ok());  // vxr view draws an existing store
   const test::ChildResult r = test::run_child(viewer_command(script, "--annotations " + store_dir));
   INFO(r.output);
   REQUIRE(r.exit_code == 0);

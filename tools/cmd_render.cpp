@@ -33,6 +33,7 @@
 #include "command.h"
 #include "core/output_file.h"
 #include "core/trace.h"
+#include "render/annotation_renderer.h"
 #include "render/camera.h"
 #include "render/lod/brick_renderer.h"
 #include "render/raycaster.h"
@@ -61,6 +62,7 @@ struct Options {
   bool no_skip = false;  // lod: no empty-space skipping (bricks or cells), for A/B timing
   bool json = false;     // lod: per-frame figures as JSON on stdout
   bool size_given = false, timepoint_given = false, path_given = false;
+  std::string annotations;  // --annotations STORE (a project input picks its own)
   std::string card;       // STORE:ID to restore
   std::string save_card;  // STORE to add a card to
   std::string card_title, card_note;
@@ -156,7 +158,9 @@ using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 // the LOD bias, and writes the last.
 int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context& gpu, bool procedural, uint32_t width,
             uint32_t height, const CameraMaker& make_camera, Resolved* resolved) {
-  auto session = open_volume_session(o.input, {});
+  SessionFlags flags;
+  flags.annotations = o.annotations;
+  auto session = open_volume_session(o.input, flags);
   if (!session) return fail(session.status(), procedural ? kExitUsage : kExitFailure);
   for (const std::string& n : session->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
   const std::shared_ptr<const ChunkSource> src = session->source;
@@ -192,6 +196,7 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
 
   BrickRendererOptions ro;
   ro.pool.channels = *drawn;
+  ro.preload_if_fits = true;  // small volumes: every brick in the slots vxr view gives them (same pixels)
   auto renderer = BrickRenderer::create(gpu, *src, ro);
   if (!renderer) return fail(renderer.status());
   BrickRenderer& r = **renderer;
@@ -199,6 +204,19 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   Camera camera;
   if (int rc = make_camera(placement, info.dims[2] == 1, &camera); rc != kExitOk) return rc;
   *resolved = {"lod", *drawn, s, camera};
+  // Annotations: drawn first in each frame's command buffer; rays end at them.
+  std::unique_ptr<AnnotationRenderer> annotation_renderer;
+  AnnotationScene annotations;
+  BrickRenderer::UnderlayRecorder underlay;
+  if (!session->annotation_store.empty()) {
+    auto loaded = load_annotation_scene(session->annotation_store, placement, o.timepoint);
+    if (!loaded) return fail(loaded.status());
+    annotations = std::move(loaded).value();
+    auto ar = AnnotationRenderer::create(gpu);
+    if (!ar) return fail(ar.status());
+    annotation_renderer = std::move(ar).value();
+    underlay = [&](VkCommandBuffer cmd) { return annotation_renderer->record(cmd, 0, camera, annotations, width, height); };
+  }
 
   BrickFrameSettings frame;
   frame.lod.lod_bias = o.lod_bias;
@@ -227,7 +245,8 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   }
   nlohmann::json frames_json = nlohmann::json::array();
   BrickFrameStats st;
-  uint64_t total_bytes = 0, total_bricks = 0;
+  // create() uploaded the pinned bricks (top level; every brick of a volume that fits).
+  uint64_t total_bricks = r.pool().used(), total_bytes = total_bricks * r.pool().brick_bytes();
   std::vector<double> frame_ms;
   Result<ImageRgba8> image = invalid_argument("unset");
   int frames = 0;
@@ -236,7 +255,7 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   while (frames < max_frames) {
     if (budget) frame.lod.lod_bias = controller.bias;
     const auto f0 = std::chrono::steady_clock::now();
-    image = r.render(camera, s, frame, width, height, &st);
+    image = r.render(camera, s, frame, width, height, &st, underlay);
     if (!image) return fail(image.status(), image.status().code() == ErrorCode::kInvalidArgument ? kExitUsage : kExitFailure);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - f0).count();
     frame_ms.push_back(ms);
@@ -305,24 +324,6 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   return kExitOk;
 }
 
-// "STORE:ID" (the store path may itself hold colons: the id follows the last).
-Result<Scene> load_card_scene(const std::string& spec) {
-  const size_t colon = spec.rfind(':');
-  char* end = nullptr;
-  const std::string id_text = colon == std::string::npos ? "" : spec.substr(colon + 1);
-  const unsigned long long id = std::strtoull(id_text.c_str(), &end, 10);
-  if (colon == std::string::npos || colon == 0 || id_text.empty() || *end != '\0' || id == 0)
-    return invalid_argument("--card '" + spec + "': give STORE:ID, e.g. brain.vxr/annotations:3");
-  const std::string store_path = spec.substr(0, colon);
-  VXR_ASSIGN_OR_RETURN(auto store, annotate::AnnotationStore::open(store_path, /*create=*/false));
-  VXR_ASSIGN_OR_RETURN(annotate::Card card, store->card(id, /*with_media=*/false));
-  if (card.scene_json.empty())
-    return invalid_argument(store_path + ": card " + id_text + " was stored without a scene; there is no view to restore");
-  auto scene = scene_from_json(card.scene_json);
-  if (!scene) return invalid_argument(store_path + ": card " + id_text + ": " + scene.status().message());
-  return scene;
-}
-
 // Adds the picture just written as a card whose Scene is what this run
 // resolved, so `--card` draws it again without guessing anything.
 int save_card(const Options& o, Scene sc, const Resolved& r, uint32_t width, uint32_t height) {
@@ -340,6 +341,7 @@ int save_card(const Options& o, Scene sc, const Resolved& r, uint32_t width, uin
   sc.path = r.renderer == "dense" ? o.path : "";
   sc.lod_bias = r.renderer == "lod" ? o.lod_bias : 0.0;
   sc.render = r.settings;
+  sc.annotations = o.annotations.empty() ? "" : std::filesystem::absolute(o.annotations, ec).lexically_normal().string();
   auto png = annotate::read_whole_file(o.output);
   if (!png) return fail(png.status());
   annotate::Card card;
@@ -373,10 +375,11 @@ int run(const Options& given) {
     if (o.renderer.empty()) o.renderer = sc.renderer;
     if (!o.path_given && !sc.path.empty()) o.path = sc.path;
     if (!o.lod_bias_given && sc.lod_bias != 0.0) o.lod_bias = sc.lod_bias, o.lod_bias_given = true;
+    if (o.annotations.empty()) o.annotations = sc.annotations;
   };
   if (!o.card.empty()) {
     if (!o.settings_path.empty()) return fail(invalid_argument("give --card or --settings, not both"), kExitUsage);
-    auto sc = load_card_scene(o.card);
+    auto sc = load_card_scene(o.card, o.annotations, o.input);
     if (!sc) {
       const ErrorCode c = sc.status().code();
       return fail(sc.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage : kExitFailure);
@@ -455,6 +458,8 @@ int run(const Options& given) {
   if (renderer == "lod" && o.path_given && o.path == "fragment")
     return fail(invalid_argument("--path fragment: the dense renderer's fragment path; add --renderer dense"),
                 kExitUsage);
+  if (renderer == "dense" && !o.annotations.empty())
+    return fail(invalid_argument("--annotations: drawn by the out-of-core renderer; drop --renderer dense"), kExitUsage);
   if (renderer == "dense" && procedural)
     return fail(invalid_argument("--renderer dense: a procedural source is drawn only by --renderer lod"), kExitUsage);
   if (renderer == "dense" && (o.json || o.no_skip))
@@ -624,7 +629,10 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_flag("--json", o->json,
                 "lod: print per-frame GPU ms, wall ms and samples as JSON (with --reference: RMSE against the CPU "
                 "reference of the finest level, 8-bit units)");
-  cmd->add_option("--card", o->card, "STORE:ID: restore a card's scene (volume, camera, settings, size); flags override");
+  add_annotations_option(cmd, o->annotations);
+  cmd->add_option("--card", o->card,
+                  "STORE:ID (or ID of the --annotations store): restore a card's scene (volume, camera, settings, size); "
+                  "flags override");
   cmd->add_option("--save-card", o->save_card, "STORE: also store the picture as a card with the full scene to restore it");
   cmd->add_option("--card-title", o->card_title, "with --save-card: the card's title");
   cmd->add_option("--card-note", o->card_note, "with --save-card: the card's note");

@@ -10,10 +10,12 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "command.h"
 #include "core/output_file.h"
+#include "render/annotation_renderer.h"
 #include "render/volume_session.h"
 #include "xr/desktop/viewer_setup.h"
 #include "xr/headless/headless_target.h"
@@ -43,8 +45,9 @@ struct Options {
   double fps = 30.0;
   bool no_ui = false;
   std::string ui_script;
-  std::string annotations;
   SessionFlags flags;
+  std::string card;  // STORE:ID or ID
+  bool lod_bias_given = false;
 };
 
 // The value range the window/level sliders span: the dtype's, or around the
@@ -69,10 +72,11 @@ std::array<double, 2> slider_range(const VolumeInfo& info, const RenderSettings&
 }
 
 // The desktop viewer's setup: panels over the session's settings, the UI
-// script checked against them, the annotation store opened (created if missing).
+// script checked against them, the annotation store (--annotations or the project's) for the tools.
 Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, const VolumeSession& session,
                                                             const xr::VolumeTransform& transform,
-                                                            const VolumePlacement& placement) {
+                                                            const VolumePlacement& placement,
+                                                            const std::optional<Scene>& card) {
   auto setup = std::make_shared<xr::ViewerSetup>();
   const VolumeInfo& info = session.source->info();
   setup->dataset = o.sample || o.input.empty() ? std::string("sample (MRI head)")
@@ -82,7 +86,8 @@ Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, co
   setup->scene.volume = o.sample || o.input.empty() || o.input.rfind("procedural:", 0) == 0
                             ? o.input
                             : std::filesystem::absolute(o.input, ec).string();
-  setup->scene.render = session.settings;
+  setup->scene.render = card ? card->render : session.settings;  // a card's settings and timepoint, as --card shows
+  if (card) setup->scene.timepoint = card->timepoint;
   setup->timepoints = info.timepoints;
   setup->data_range = slider_range(info, session.settings);
   setup->placement = placement;
@@ -92,14 +97,16 @@ Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, co
     if (!histogram) return histogram.status();
     setup->histograms.push_back(std::move(histogram).value());
   }
-  if (!o.annotations.empty()) {
-    auto store = annotate::AnnotationStore::open(o.annotations, true);
-    if (!store) return Status(store.status().code(), o.annotations + ": " + store.status().message());
+  // --annotations (or the project's store): the viewer's tools edit it.
+  const std::string& store_path = session.annotation_store;
+  if (!store_path.empty()) {
+    auto store = annotate::AnnotationStore::open(store_path, true);
+    if (!store) return Status(store.status().code(), store_path + ": " + store.status().message());
     setup->store = std::move(store).value();
   }
   if (!o.ui_script.empty()) {
     const xr::ViewerState state(setup->scene, setup->timepoints, setup->data_range);
-    auto script = xr::load_ui_script(o.ui_script, state, {o.input, o.ui_script, o.annotations}, setup->store != nullptr);
+    auto script = xr::load_ui_script(o.ui_script, state, {o.input, o.ui_script, store_path}, setup->store != nullptr);
     if (!script) return script.status();
     setup->script = std::move(script).value();
   }
@@ -116,7 +123,28 @@ Result<std::string> movie_scratch_dir(const std::string& movie) {
   return templ;
 }
 
-int run(const Options& o) {
+int run(const Options& given) {
+  Options o = given;
+  std::optional<Scene> card;
+  if (!o.card.empty()) {
+    if (!o.flags.colormap.empty() || !o.flags.window.empty() || !o.flags.model.empty() || o.flags.step != 0.0)
+      return fail(invalid_argument("--card restores the card's render settings; drop --colormap/--window/--model/--step "
+                                   "(vxr render --card takes them as overrides)"),
+                  kExitUsage);
+    if (!o.movie.empty()) return fail(invalid_argument("--card and --movie: give one"), kExitUsage);
+    auto sc = load_card_scene(o.card, o.flags.annotations, o.input);
+    if (!sc) {
+      const ErrorCode c = sc.status().code();
+      return fail(sc.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage : kExitFailure);
+    }
+    if (o.input.empty() && !o.sample) o.input = sc->volume;
+    if (o.flags.annotations.empty()) o.flags.annotations = sc->annotations;
+    if (!o.lod_bias_given) o.lod_bias = sc->lod_bias;
+    if (sc->renderer == "dense")
+      std::fprintf(stderr, "vxr view: note: card %s was drawn by the dense renderer; the view draws it out of core\n",
+                   o.card.c_str());
+    card = *sc;
+  }
   if (o.frame_budget_ms < 0.0) return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
   if (!o.json.empty()) {
     const std::string inputs[] = {o.input};
@@ -146,7 +174,7 @@ int run(const Options& o) {
   }
   for (const std::string& n : session->notes)
     std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
-  if (const VolumeInfo& info = session->source->info(); info.channels > 1 || info.timepoints > 1)
+  if (const VolumeInfo& info = session->source->info(); !card && (info.channels > 1 || info.timepoints > 1))
     std::fprintf(stderr, "vxr view: %s: showing channel 0 of timepoint 0 (of %u channels, %u timepoints)\n",
                  o.input.c_str(), unsigned(info.channels), unsigned(info.timepoints));
   xr::TargetRequest req;
@@ -184,7 +212,7 @@ int run(const Options& o) {
                                   info.voxel_size};
   const xr::VolumeTransform start = xr::default_volume_transform(placement);
   if (!o.no_ui && o.movie.empty() && !o.force_xr && !o.force_headless) {
-    auto setup = viewer_setup(o, *session, start, placement);
+    auto setup = viewer_setup(o, *session, start, placement, card);
     if (!setup) {
       const ErrorCode c = setup.status().code();
       return fail(setup.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage
@@ -201,17 +229,44 @@ int run(const Options& o) {
       req.headless.script.height = g.height;
     }
   }
+
+  if (card) {
+    if (card->timepoint >= info.timepoints)
+      return fail(invalid_argument("--card: timepoint " + std::to_string(card->timepoint) + ", but " + o.input +
+                                   " has " + std::to_string(info.timepoints)),
+                  kExitUsage);
+    // One view with the card's camera and size, as vxr render --card draws it
+    // (a headset or window keeps its own eye size).
+    req.headless.stereo = false;
+    if (!o.width && card->viewport[0] > 0) req.headless.script.width = card->viewport[0];
+    if (!o.height && card->viewport[1] > 0) req.headless.script.height = card->viewport[1];
+    req.headless.camera = scene_camera(*card, placement, info.dims[2] == 1);
+  }
+
   auto choice = xr::choose_target(req);
   if (!choice) return fail(choice.status(), kExitFailure);
   std::printf("vxr view: %s\n", choice->reason.c_str());
   std::fflush(stdout);
 
+  if (card && choice->kind != xr::TargetKind::kHeadless)
+    std::fprintf(stderr, "vxr view: note: --card: settings, channels, timepoint and annotations restored; the card's "
+                         "camera is restored headless only (a headset or window keeps its own pose)\n");
+
   xr::ViewOptions vo;
   vo.frames = o.frames;
-  vo.settings = session->settings;
+  vo.settings = card ? card->render : session->settings;
+  if (card) vo.channels = card->channels;
   vo.warp.enabled = o.lens_warp;
   vo.frame.lod.lod_bias = o.lod_bias;
+  vo.frame.lod.timepoint = card ? card->timepoint : 0;
   vo.frame_budget_ms = o.frame_budget_ms;
+  // The desktop viewer holds the store open itself (its tools edit it) and draws its markers over the volume.
+  const bool viewer_has_store = req.viewer && req.viewer->store;
+  if (!session->annotation_store.empty() && !viewer_has_store) {
+    auto annotations = load_annotation_scene(session->annotation_store, placement, vo.frame.lod.timepoint);
+    if (!annotations) return fail(annotations.status());
+    vo.annotations = std::move(annotations).value();
+  }
   auto stats = xr::run_view(choice->factory, session->source, vo, start);
   if (!stats) return fail(stats.status());
   if (!o.movie.empty()) {
@@ -272,13 +327,18 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--ui-script", o->ui_script,
                   "desktop: run this scripted session (JSON list of steps: viewer commands, play/pause, screenshot "
                   "PATH, count, measure, tool, click, card; see xr/desktop/ui_script.h), then close");
-  cmd->add_option("--annotations", o->annotations,
-                  "desktop: annotation store (folder, created if missing) for markers, measurements and cards");
+  add_annotations_option(cmd, o->flags.annotations);
+  cmd->add_option("--card", o->card,
+                  "STORE:ID (or ID of the --annotations store or the input project's): restore a card's volume, "
+                  "settings, channels, timepoint and annotations; headless, its exact camera and size too");
   cmd->add_option("--colormap", o->flags.colormap, "colormap name (default hot)");
   cmd->add_option("--window", o->flags.window, "LO,HI data window (default: from the data)");
   cmd->add_option("--model", o->flags.model, "optical model: ea, emission or mip");
   cmd->add_option("--step", o->flags.step, "samples every STEP voxels (default 0.5)");
-  cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
+  cmd->callback([&inv, o, cmd] {
+    o->lod_bias_given = cmd->count("--lod-bias") > 0;
+    inv.run = [o] { return run(*o); };
+  });
 }
 
 }  // namespace vxr::cli

@@ -25,15 +25,24 @@ void image_barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect
 }
 
 Result<std::unique_ptr<EyeRenderer>> EyeRenderer::create(gpu::Context& ctx, std::shared_ptr<const ChunkSource> source,
-                                                         ChunkCache* stream_from) {
+                                                         ChunkCache* stream_from, std::vector<uint32_t> channels) {
   if (!source) return invalid_argument("eye renderer: no volume");
   std::unique_ptr<EyeRenderer> r(new EyeRenderer(ctx));
   r->source_ = std::move(source);
   BrickRendererOptions o;
   o.stream_from = stream_from;
   o.preload_if_fits = true;
+  o.pool.channels = std::move(channels);
   VXR_ASSIGN_OR_RETURN(r->renderer_, BrickRenderer::create(ctx, *r->source_, o));
   return r;
+}
+
+Status EyeRenderer::set_annotations(AnnotationScene scene) {
+  if (!scene.empty() && !annotation_renderer_) {
+    VXR_ASSIGN_OR_RETURN(annotation_renderer_, AnnotationRenderer::create(ctx_));
+  }
+  annotations_ = std::move(scene);
+  return Status::ok();
 }
 
 Result<gpu::Image*> EyeRenderer::warp_image(size_t index, uint32_t width, uint32_t height, VkFormat format) {
@@ -66,6 +75,11 @@ Status EyeRenderer::record(VkCommandBuffer cmd, size_t index, const ViewSpec& vi
   const WarpAxis ax = warp_axis(view.width, warp), ay = warp_axis(view.height, warp);
   RenderTarget out{target.image, target.storage_view, target.format, target.extent, target.layout};
   out.opaque = true;
+  if (!annotations_.empty()) {
+    // At the eye's full size; with lens warp each ray reads the pixel it passes through.
+    VXR_ASSIGN_OR_RETURN(out.under,
+                         annotation_renderer_->record(cmd, index, camera, annotations_, view.width, view.height));
+  }
   if (!warp.enabled || (ax.warped() == view.width && ay.warped() == view.height)) {
     if (rays) *rays = uint64_t(view.width) * view.height;
     return renderer_->record_view(cmd, camera, settings, frame, out, stats);
@@ -78,6 +92,7 @@ Status EyeRenderer::record(VkCommandBuffer cmd, size_t index, const ViewSpec& vi
   RenderTarget grid{wimg->image, wf == VK_FORMAT_R8G8B8A8_UNORM ? wimg->view.get() : VK_NULL_HANDLE, wf,
                     {wimg->extent.width, wimg->extent.height}, VK_IMAGE_LAYOUT_GENERAL};
   grid.opaque = true;
+  grid.under = out.under;
   grid.warp_x = ax;
   grid.warp_y = ay;
   VXR_RETURN_IF_ERROR(renderer_->record_view(cmd, camera, settings, frame, grid, stats));

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "gpu/resources.h"
+#include "render/annotation_renderer.h"
 #include "render/lod/brick_renderer.h"
 #include "xr/frame_target.h"
 #include "xr/lens_warp.h"
@@ -27,8 +28,15 @@ class EyeRenderer {
   // `stream_from` (may be null): the cache whose loader threads read missing
   // bricks; null reads them after each render() (tests). Small volumes are
   // preloaded whole.
+  // `channels`: the source channels drawn (BrickPoolOptions::channels; empty: the first up to 4).
   static Result<std::unique_ptr<EyeRenderer>> create(gpu::Context& ctx, std::shared_ptr<const ChunkSource> source,
-                                                     ChunkCache* stream_from = nullptr);
+                                                     ChunkCache* stream_from = nullptr,
+                                                     std::vector<uint32_t> channels = {});
+
+  // Annotations drawn with every view from now on (world units, the volume
+  // centred at the origin: AnnotationScene). Each view records their pass
+  // first, into the same command buffer; rays end at their depth. Empty: none.
+  Status set_annotations(AnnotationScene scene);
 
   Status begin_frame(VkCommandBuffer cmd, const BrickFrameSettings& frame) {
     return renderer_->begin_frame(cmd, frame);
@@ -55,6 +63,8 @@ class EyeRenderer {
   gpu::Context& ctx_;
   std::shared_ptr<const ChunkSource> source_;
   std::unique_ptr<BrickRenderer> renderer_;
+  std::unique_ptr<AnnotationRenderer> annotation_renderer_;  // made when a scene is set
+  AnnotationScene annotations_;
   std::vector<gpu::Image> warped_;  // per view index
   gpu::Image offscreen_;            // render()'s target
 };

@@ -12,11 +12,13 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/status.h"
 #include "gpu/context.h"
+#include "render/camera.h"
 #include "xr/pose.h"
 
 namespace vxr {
@@ -33,6 +35,10 @@ struct ViewSpec {
   Pose pose;
   Fov fov;
   uint32_t width = 0, height = 0;
+  // The ray caster's camera (volume frame) when the target knows it exactly:
+  // a restored card (headless). It overrides pose, fov and the volume
+  // transform, so the view draws what `vxr render --card` draws.
+  std::optional<Camera> camera;
 };
 
 // An image the target owns (a swapchain image, a window's buffer, a headless

@@ -90,7 +90,8 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
   CacheHook cache_hook{target};
   VXR_RETURN_IF_ERROR(target.attach(*ctx));
   target.use_chunk_cache(&cache, source.get());
-  VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, source, &cache));
+  VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, source, &cache, options.channels));
+  VXR_RETURN_IF_ERROR(eyes->set_annotations(options.annotations));
   // Pool changes the settings need (apron 2 for gradients) before any frame records.
   VXR_RETURN_IF_ERROR(eyes->renderer().prepare(options.settings));
   VXR_RETURN_IF_ERROR(commands.create(*ctx));
@@ -232,7 +233,7 @@ nlohmann::json view_stats_json(const ViewStats& s, const ViewOptions& o) {
 Result<ViewStats> run_view(const TargetFactory& make_target, std::shared_ptr<const ChunkSource> source,
                            const ViewOptions& options, const VolumeTransform& initial) {
   if (!source) return invalid_argument("view: no volume");
-  VXR_RETURN_IF_ERROR(check_brick_settings(options.settings));
+  VXR_RETURN_IF_ERROR(check_brick_settings(options.settings, uint32_t(std::max<size_t>(1, options.channels.size()))));
   ViewStats stats;
   stats.transform = initial;
   GrabInteraction grab;

@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "render/annotation_renderer.h"
 #include "render/lod/brick_renderer.h"
 #include "render/volume_session.h"
 #include "xr/frame_target.h"
@@ -45,6 +46,9 @@ struct ViewOptions {
   uint64_t cache_bytes = uint64_t(1) << 30;  // decoded chunks kept on the CPU
   uint32_t loader_threads = 2;
   int max_restarts = 3;
+  std::vector<uint32_t> channels;  // source channels drawn; empty: the first up to 4
+  // Drawn with every view (world units, volume frame; load_annotation_scene). Empty: none.
+  AnnotationScene annotations;
   // Called after each rendered frame (its command buffer has completed).
   std::function<void(uint64_t frame)> on_frame;
 };

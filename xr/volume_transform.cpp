@@ -14,6 +14,7 @@ VolumeTransform default_volume_transform(const VolumePlacement& placement, doubl
 }
 
 Camera camera_for_view(const ViewSpec& view, const VolumeTransform& t) {
+  if (view.camera) return *view.camera;
   const glm::dquat to_volume = glm::conjugate(t.orientation);
   const glm::dquat eye_in_volume = to_volume * view.pose.orientation;
   Camera c;

@@ -7,15 +7,19 @@
 //
 // The pass writes premultiplied colour and view depth per pixel (world units
 // along the camera's forward axis, +inf where nothing is). The volume is then
-// cast with that depth as where its rays end (Raycaster::set_depth), and
-// composite_volume_over puts what the volume drew in front over the
+// cast with that depth as where its rays end and composited over the
 // annotations: a marker inside a bright region is dimmed by what lies
-// between it and the eye, and one in front of it is seen whole.
+// between it and the eye, and one in front of it is seen whole. The frame
+// path: record() into the frame's command buffer, then the brick renderer's
+// record_view with the returned ViewUnderlay (RenderTarget::under) does both
+// in its compute pass. The dense comparison path: render() reads the images
+// back, Raycaster::set_depth, then composite_volume_over on the CPU.
 #pragma once
 
 #include <glm/glm.hpp>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "annotate/annotations.h"
@@ -28,6 +32,7 @@
 #include "gpu/resources.h"
 #include "render/camera.h"
 #include "render/raycaster.h"  // ImageRgbaF
+#include "render/volume_renderer.h"  // ViewUnderlay
 
 namespace vxr {
 
@@ -61,11 +66,20 @@ AnnotationMesh annotation_mesh(const annotate::Mesh& mesh, const glm::dvec3& off
 
 // A store's markers (at `timepoint`) and skeletons placed in world space:
 // markers as spheres of `marker_radius` world units, nodes as spheres of
-// their radius (at least `min_node_radius`), each edge as a cone.
+// their radius (voxels of the smallest side; at least `min_node_radius`
+// world units), each edge as a cone.
 AnnotationScene annotation_scene(std::span<const annotate::Marker> markers,
                                  std::span<const annotate::Skeleton> skeletons, const VolumePlacement& placement,
                                  uint32_t timepoint, double marker_radius, double min_node_radius,
                                  glm::vec4 skeleton_color = {0.2f, 0.8f, 1.0f, 1.0f});
+
+// Everything an annotation store holds that is drawn, placed for the volume:
+// markers at `timepoint` as spheres of `marker_radius` world units (0: 1.5%
+// of the box diagonal), skeletons (node radii in voxels of the smallest side,
+// at least half a voxel), and every stored mesh in its colour (positions in
+// voxels). Errors name the store.
+Result<AnnotationScene> load_annotation_scene(const std::string& store_path, const VolumePlacement& placement,
+                                              uint32_t timepoint, double marker_radius = 0.0);
 
 struct AnnotationImage {
   ImageRgba8 color;               // premultiplied, top row first; transparent where nothing is
@@ -74,22 +88,37 @@ struct AnnotationImage {
 
 class AnnotationRenderer {
  public:
+  // Views one frame can record (one set of images and buffers each: eyes).
+  static constexpr size_t kMaxViews = 8;
   static Result<std::unique_ptr<AnnotationRenderer>> create(gpu::Context& ctx);
 
-  // Draws the scene offscreen and reads it back (PNG output, tests, and the
-  // depth the volume pass ends its rays at).
+  // Records view `index` (< kMaxViews) of the frame into `cmd`: the scene
+  // drawn into that view's colour and depth images, left in GENERAL for the
+  // volume renderer's compute pass (RenderTarget::under). Nothing is read
+  // back; the images and buffers of `index` are reused by the next frame, so
+  // the caller waits for this one first.
+  Result<ViewUnderlay> record(VkCommandBuffer cmd, size_t index, const Camera& camera, const AnnotationScene& scene,
+                              uint32_t width, uint32_t height);
+
+  // Draws the scene offscreen (view 0), submits, waits and reads it back
+  // (tests, and the dense ray caster's depth input).
   Result<AnnotationImage> render(const Camera& camera, const AnnotationScene& scene, uint32_t width, uint32_t height);
 
  private:
+  // One view's images, buffers and descriptor sets.
+  struct View {
+    VkDescriptorSet set = VK_NULL_HANDLE, mesh_set = VK_NULL_HANDLE;
+    gpu::Buffer prims, params, corners, colors;
+    gpu::Image color, depth_out, zbuffer;
+  };
   explicit AnnotationRenderer(gpu::Context& ctx) : ctx_(ctx) {}
-  Status ensure_targets(uint32_t width, uint32_t height);
+  Result<View*> view(size_t index);
+  Status ensure_targets(View& v, uint32_t width, uint32_t height);
 
   gpu::Context& ctx_;
   gpu::ComputePipeline pipeline_, mesh_pipeline_;
   gpu::Handle<VkDescriptorPool> pool_, mesh_pool_;
-  VkDescriptorSet set_ = VK_NULL_HANDLE, mesh_set_ = VK_NULL_HANDLE;
-  gpu::Buffer prims_, view_, corners_, colors_;
-  gpu::Image color_, depth_out_, zbuffer_;
+  std::vector<std::unique_ptr<View>> views_;
 };
 
 // The volume (premultiplied float RGBA, rays ended at the annotations' depth)

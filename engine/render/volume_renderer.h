@@ -84,6 +84,20 @@ struct WarpAxis {
 // No warp: one ray per pixel of `pixels`.
 inline WarpAxis identity_warp(uint32_t pixels) { return {pixels, 0, pixels, 0, 1}; }
 
+// What a view's volume is drawn over (AnnotationRenderer::record: markers,
+// skeletons, meshes), two images of the view's full size (warp_x.full x
+// warp_y.full) in GENERAL layout, written before the volume's commands: rays
+// end at `depth` (R32F view depth, world units along the camera's forward
+// axis, +inf where nothing is; the samples whose midpoints lie in front of it
+// are taken) and `color` (RGBA8, premultiplied) is composited under the
+// volume: out = volume + (1 - volume.a) * color, in float, rounded once.
+struct ViewUnderlay {
+  VkImageView depth = VK_NULL_HANDLE;
+  VkImageView color = VK_NULL_HANDLE;
+  VkExtent2D extent{0, 0};
+  bool present() const { return depth != VK_NULL_HANDLE; }
+};
+
 // An image on the renderer's device that a view is drawn into.
 struct RenderTarget {
   VkImage image = VK_NULL_HANDLE;
@@ -98,6 +112,7 @@ struct RenderTarget {
   // Lens warp (both active, or neither): the rect is the warped grid
   // (warp_x.warped() x warp_y.warped() rays) over the camera's whole frustum.
   WarpAxis warp_x, warp_y;
+  ViewUnderlay under;  // none by default
 };
 
 // True for the 8-bit UNORM colour formats (the rounding rule applies).

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
+#include "annotate/project.h"
 #include "assets/assets.h"
 #include "render/transfer_function.h"
 #include "volume/container_reader.h"
@@ -100,8 +102,19 @@ Result<std::unique_ptr<ProceduralSource>> open_procedural(const std::string& spe
   return src;
 }
 
-Result<VolumeSession> open_volume_session(const std::string& input, const SessionFlags& flags) {
+Result<VolumeSession> open_volume_session(const std::string& given, const SessionFlags& flags) {
   VolumeSession out;
+  std::string input = given;
+  out.annotation_store = flags.annotations;
+  // A project folder: its volume, and its store unless another was named.
+  std::error_code ec;
+  if (!input.empty() && std::filesystem::exists(std::filesystem::path(input) / "project.json", ec)) {
+    VXR_ASSIGN_OR_RETURN(annotate::ProjectInfo project, annotate::read_project(input));
+    if (out.annotation_store.empty()) out.annotation_store = (std::filesystem::path(input) / project.annotations).string();
+    input = (std::filesystem::path(input) / project.volume).string();
+  }
+  if (!out.annotation_store.empty() && !std::filesystem::is_directory(out.annotation_store, ec))
+    return not_found(out.annotation_store + ": no annotation store here (make one with `vxr annotate init`)");
   out.settings = default_view_settings();
   bool window_known = false;
   if (input.empty()) {

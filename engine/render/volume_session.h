@@ -9,6 +9,7 @@
 //   *.vxc, OME-Zarr                    read in place, chunk by chunk (open_chunk_source)
 //   anything vxr imports               read whole (averaged down to fit the
 //                                      memory limit), pyramid built in memory
+//   NAME.vxr/ (a project folder)       its volume, and its annotation store drawn
 #pragma once
 
 #include <memory>
@@ -30,6 +31,9 @@ struct SessionFlags {
   std::string model;      // optical model name; empty: emission-absorption
   double step = 0.0;      // voxels per sample; 0: the default (0.5)
   uint64_t max_dense_bytes = uint64_t(1) << 30;  // imported files: per channel, averaged down past it
+  // An annotation store (engine/annotate) drawn with the volume; empty: a
+  // project folder's own store (NAME.vxr/annotations), else none.
+  std::string annotations;
 };
 
 struct VolumeSession {
@@ -37,6 +41,7 @@ struct VolumeSession {
   RenderSettings settings;
   std::string description;         // "procedural:vessels:65536 (u8 65536x65536x65536, 11 levels)"
   std::vector<std::string> notes;  // worth telling the user (averaged down, channel 0 of 3)
+  std::string annotation_store;    // the store to draw (SessionFlags::annotations or the project's); empty: none
 };
 
 // The RenderSettings a viewer starts from for 8-bit data of unknown content.

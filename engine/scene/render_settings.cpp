@@ -202,6 +202,7 @@ std::string scene_to_json(const Scene& s) {
             {"path", s.path},
             {"lod_bias", s.lod_bias},
             {"render", to_j(s.render)}};
+  if (!s.annotations.empty()) j["annotations"] = s.annotations;
   if (s.has_camera)
     j["camera"] = {{"eye", s.camera.eye}, {"target", s.camera.target}, {"up", s.camera.up}, {"fov_y_deg", s.camera.fov_y_deg}};
   return j.dump(2);
@@ -239,6 +240,7 @@ Result<Scene> scene_from_json(const std::string& text) {
     get(j, "path", s.path);
     if (!s.path.empty() && s.path != "compute" && s.path != "fragment")
       throw KeyError{"\"path\": use compute, fragment or \"\", not '" + s.path + "'"};
+    get(j, "annotations", s.annotations);
     get(j, "lod_bias", s.lod_bias);
     if (!(std::isfinite(s.lod_bias) && std::abs(s.lod_bias) <= 16.0))
       throw KeyError{"lod_bias must be within -16..16"};

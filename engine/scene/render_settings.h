@@ -120,6 +120,7 @@ struct Scene {
   std::string renderer;  // "lod", "dense" or "" (the default for the input)
   std::string path;      // dense renderer's "compute" or "fragment"; "" = compute
   double lod_bias = 0.0;  // lod renderer: log2 voxels per pixel accepted
+  std::string annotations;  // annotation store drawn with the volume (absolute path); "": none or the project's
   RenderSettings render;
   bool operator==(const Scene&) const = default;
 };

@@ -31,10 +31,34 @@ std::shared_ptr<const Chunk> ChunkCache::get(const ChunkKey& key) {
 }
 
 Result<std::shared_ptr<const Chunk>> ChunkCache::get_or_load(const ChunkKey& key) {
-  if (auto c = get(key)) return c;
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    bool counted = false;
+    for (;;) {
+      if (auto it = entries_.find(key); it != entries_.end()) {
+        if (!counted) ++counters_.hits;
+        lru_.splice(lru_.begin(), lru_, it->second.lru);
+        return it->second.chunk;
+      }
+      if (!counted) ++counters_.misses;
+      counted = true;
+      if (!loading_.count(key)) break;
+      // Another thread is decoding it: wait for that rather than decode it twice.
+      loaded_cv_.wait(lock);
+    }
+    // This thread loads it now: a queued request for it would load it again.
+    if (auto q = queued_.find(key); q != queued_.end()) {
+      queue_.erase(q->second);
+      queued_.erase(q);
+    }
+    loading_.insert(key);
+  }
   auto r = source_->read(key);
   std::lock_guard<std::mutex> lock(mutex_);
   ++counters_.loads;
+  loading_.erase(key);
+  loaded_cv_.notify_all();
+  if (queue_.empty() && loading_.empty()) idle_cv_.notify_all();
   if (!r) {
     ++counters_.load_errors;
     return r.status();
@@ -166,6 +190,10 @@ void ChunkCache::loader_main() {
       key = first->second;
       queued_.erase(key);
       queue_.erase(first);
+      if (entries_.count(key) || loading_.count(key)) {  // loaded meanwhile by get_or_load
+        if (queue_.empty() && loading_.empty()) idle_cv_.notify_all();
+        continue;
+      }
       loading_.insert(key);
     }
     auto r = source_->read(key);
@@ -185,6 +213,7 @@ void ChunkCache::loader_main() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       loading_.erase(key);
+      loaded_cv_.notify_all();
       if (queue_.empty() && loading_.empty()) idle_cv_.notify_all();
     }
   }

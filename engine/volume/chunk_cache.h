@@ -58,8 +58,10 @@ class ChunkCache {
   // Counts a hit or a miss. Never blocks on I/O.
   std::shared_ptr<const Chunk> get(const ChunkKey& key);
 
-  // The cached chunk, or reads it now on the calling thread and caches it.
-  // Errors of the source come back unchanged (nothing is cached then).
+  // The cached chunk, or reads it now on the calling thread and caches it
+  // (waiting instead when a loader thread is reading it already; a queued
+  // request for it is taken over). Errors of the source come back unchanged
+  // (nothing is cached then).
   Result<std::shared_ptr<const Chunk>> get_or_load(const ChunkKey& key);
 
   // Queues an asynchronous load; higher priority loads first (ties: first
@@ -108,6 +110,7 @@ class ChunkCache {
   ChunkCacheOptions options_;
   mutable std::mutex mutex_;
   std::condition_variable work_cv_, idle_cv_;
+  std::condition_variable loaded_cv_;  // a load finished (get_or_load waits on one in flight)
   std::unordered_map<ChunkKey, Entry, ChunkKeyHash> entries_;
   std::list<ChunkKey> lru_;
   std::map<QueueKey, ChunkKey> queue_;

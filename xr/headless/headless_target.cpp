@@ -51,6 +51,7 @@ Result<FrameState> HeadlessTarget::wait_frame() {
   } else {
     f.views = {ViewSpec{s.head, o_.script.fov, o_.script.width, o_.script.height}};
   }
+  for (ViewSpec& v : f.views) v.camera = o_.camera;
   for (int h = 0; h < 2; ++h) {
     const ScriptHand& sh = s.hands[h];
     HandInput& in = f.input.hands[h];

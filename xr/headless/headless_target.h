@@ -18,6 +18,9 @@ struct HeadlessOptions {
   std::string png_dir;      // empty: no PNGs
   bool png_every_frame = false;  // else only the last frame before exit
   uint64_t end_frame = 0;   // stop after this many frames; 0: after the script's last key + 1
+  // Every view drawn with this camera (volume frame; ViewSpec::camera), e.g.
+  // a restored card's, instead of the script's poses.
+  std::optional<Camera> camera;
 };
 
 class HeadlessTarget : public FrameTarget {

@@ -25,6 +25,8 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {7, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell ranges
+      {9, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},   // underlay depth
+      {10, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // underlay colour
   };
 }
 
@@ -212,9 +214,21 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->params_, gpu::create_buffer(ctx, {r->params_stride_ * options.max_views,
                                                             VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                                                             gpu::MemoryIntent::kUpload, "brick raycast params"}));
+  // A view without an underlay still binds one (the flag says not to read it).
+  for (auto [img, format, name] : {std::tuple{&r->no_under_depth_, VK_FORMAT_R32_SFLOAT, "no underlay depth"},
+                                   std::tuple{&r->no_under_color_, VK_FORMAT_R8G8B8A8_UNORM, "no underlay colour"}}) {
+    VXR_ASSIGN_OR_RETURN(*img, gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, format, {1, 1, 1}, VK_IMAGE_USAGE_STORAGE_BIT, name}));
+  }
+  VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    for (gpu::Image* img : {&r->no_under_depth_, &r->no_under_color_})
+      gpu::transition_image(cmd, *img, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                            VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+  }));
   std::vector<VkDescriptorSet> all = r->view_sets_;
   all.push_back(r->mono_set_);
   for (VkDescriptorSet set : all) {
+    gpu::write_storage_image(ctx, set, 9, r->no_under_depth_.view);
+    gpu::write_storage_image(ctx, set, 10, r->no_under_color_.view);
     if (set != r->mono_set_) r->bind_atlases(set, r->pool_atlases());
     // The monolithic texture has no cells (its record says so); the binding still needs a buffer.
     gpu::write_storage_buffer(ctx, set, 8, r->pool_->cell_ranges().buffer);
@@ -448,7 +462,9 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   const VkImageLayout final_layout =
       target.layout == VK_IMAGE_LAYOUT_UNDEFINED ? VK_IMAGE_LAYOUT_GENERAL : target.layout;
   const VkOffset2D at = target.rect.offset;
-  const uint32_t out_flags = VXR_BRICK_STORE_FINAL | (target.opaque ? VXR_BRICK_OPAQUE : 0u) |
+  // Every pass of a view with an underlay ends its rays at its depth.
+  const uint32_t under = target.under.present() ? VXR_BRICK_UNDERLAY : 0u;
+  const uint32_t out_flags = under | VXR_BRICK_STORE_FINAL | (target.opaque ? VXR_BRICK_OPAQUE : 0u) |
                              (is_unorm8(target.format) ? VXR_BRICK_QUANTIZE : 0u) |
                              (direct ? 0u : VXR_BRICK_FINAL_FLOAT);
   shader::BrickCastParams p{};
@@ -492,13 +508,14 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   } else if (mode == BrickPassMode::kTiled) {
     dispatch(0, 0, VXR_BRICK_TILE_LISTS | out_flags);
   } else {
-    dispatch(0, 0, VXR_BRICK_STORE_ACCUM);  // clear
+    dispatch(0, 0, under | VXR_BRICK_STORE_ACCUM);  // clear
     const uint32_t max_groups = ctx_.limits().maxComputeWorkGroupCount[0];
     for (const glm::uvec2& wave : waves) {
       compute_barrier(cmd);  // a wave continues rays the previous one wrote
       for (uint32_t done = 0; done < wave.y; done += max_groups) {
         p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), 0, 0);
-        p.pass = glm::uvec4(wave.x + done, cells_per_axis, VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM, 0);
+        p.pass = glm::uvec4(wave.x + done, cells_per_axis,
+                            under | VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM, 0);
         vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
         vkCmdDispatch(cmd, std::min(max_groups, wave.y - done), 1, 1);
         ++dispatches;
@@ -738,6 +755,12 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   const WarpAxis ay = target.warp_y.active() ? target.warp_y : identity_warp(height);
   if (ax.warped() != width || ay.warped() != height || (ax.active() && ay.active() && ax.step != ay.step))
     return invalid_argument("render: the lens-warp grid does not match the view's rectangle");
+  if (target.under.present() &&
+      (target.under.color == VK_NULL_HANDLE || target.under.extent.width != ax.full || target.under.extent.height != ay.full))
+    return invalid_argument("render: the underlay (annotations) is " + std::to_string(target.under.extent.width) + "x" +
+                            std::to_string(target.under.extent.height) + " with" +
+                            (target.under.color ? "" : "out") + " colour; the view needs " + std::to_string(ax.full) +
+                            "x" + std::to_string(ay.full) + " with colour");
   const LodView view = view_for(camera, ax.full, ay.full);
 
   auto t0 = std::chrono::steady_clock::now();
@@ -803,6 +826,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   const bool direct = target.storage_view != VK_NULL_HANDLE && target.format == VK_FORMAT_R8G8B8A8_UNORM;
   gpu::write_storage_image(ctx_, set, 2, direct ? target.storage_view : target_.view.get());
   gpu::write_storage_image(ctx_, set, 3, accum_.view);
+  gpu::write_storage_image(ctx_, set, 9, target.under.present() ? target.under.depth : no_under_depth_.view.get());
+  gpu::write_storage_image(ctx_, set, 10, target.under.present() ? target.under.color : no_under_color_.view.get());
   gpu::write_storage_buffer(ctx_, set, 4, table_.buffer, table_bytes, table_base);
   gpu::write_storage_buffer(ctx_, set, 6, items_.buffer, items_bytes, items_base);
   gpu::write_uniform_buffer(ctx_, set, 7, params_.buffer, sizeof(shader::RaycastParams), params_offset);
@@ -834,7 +859,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
 
 Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSettings& s,
                                          const BrickFrameSettings& frame, uint32_t width, uint32_t height,
-                                         BrickFrameStats* stats_out) {
+                                         BrickFrameStats* stats_out, const UnderlayRecorder& underlay) {
   VXR_TRACE_SCOPE("brick_renderer.render");
   if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
   VXR_RETURN_IF_ERROR(check_brick_settings(s, channels()));
@@ -842,7 +867,7 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
   VXR_RETURN_IF_ERROR(ensure_target(width, height));
   BrickFrameStats st;
   Status recorded = Status::ok();
-  const RenderTarget target{target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL};
+  RenderTarget target{target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL};
   const auto t0 = std::chrono::steady_clock::now();
   VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
     if (timestamps_) {
@@ -850,6 +875,11 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
       vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, timestamps_, 0);
     }
     recorded = begin_frame(cmd, frame);
+    if (recorded && underlay) {
+      auto under = underlay(cmd);
+      if (under) target.under = *under;
+      else recorded = under.status();
+    }
     if (recorded) recorded = record_view(cmd, camera, s, frame, target, &st);
     if (timestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_BOTTOM_OF_PIPE_BIT, timestamps_, 1);
   }));

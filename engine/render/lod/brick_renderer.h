@@ -41,6 +41,7 @@
 // (BrickPoolOptions::channels).
 #pragma once
 
+#include <functional>
 #include <map>
 #include <span>
 #include <memory>
@@ -135,8 +136,12 @@ class BrickRenderer final : public VolumeRenderer {
   // (tests, PNG output): premultiplied RGBA, top row first. Complete every
   // frame: missing bricks are drawn from their nearest resident ancestor;
   // without a stream cache they are read after the frame, within the budget.
+  // `underlay`, if given, records what the volume is drawn over (e.g.
+  // AnnotationRenderer::record) into the same command buffer, before the view.
+  using UnderlayRecorder = std::function<Result<ViewUnderlay>(VkCommandBuffer)>;
   Result<ImageRgba8> render(const Camera& camera, const RenderSettings& settings, const BrickFrameSettings& frame,
-                            uint32_t width, uint32_t height, BrickFrameStats* stats = nullptr);
+                            uint32_t width, uint32_t height, BrickFrameStats* stats = nullptr,
+                            const UnderlayRecorder& underlay = {});
 
   // Loads `level` of the source at `timepoint` into one 3D texture per drawn
   // channel (refused past the device's 3D image limit) for render_monolithic().
@@ -207,6 +212,7 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<VkDescriptorSet> view_sets_;  // one per view of a frame
   gpu::Handle<VkSampler> linear_;
   gpu::Image transfer_tex_, target_, accum_;
+  gpu::Image no_under_depth_, no_under_color_;  // 1x1, bound where a view has no underlay
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, tf_staging_;
