@@ -22,7 +22,7 @@ TEST_CASE("desktop: the window opens under Xvfb and the screenshot shows the vol
   const std::string dir = test::xr_out_dir("desktop");
   const std::string shot = dir + "/screenshot.png";
   const test::ChildResult r = test::run_child("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(VXR_BINARY) +
-                                              " view --sample --desktop --frames 3 --width 128 --height 128"
+                                              " view --sample --desktop --no-ui --frames 3 --width 128 --height 128"
                                               " --screenshot " + shot);
   INFO(r.output);
   REQUIRE(r.exit_code == 0);

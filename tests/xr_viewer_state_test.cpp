@@ -163,6 +163,109 @@ TEST_CASE("viewer state: keys step time within range and record toggles") {
   CHECK(viewer_shortcuts().size() >= 8);
 }
 
+TEST_CASE("viewer state: playback (fake clock) advances in order, keys pause, step and change the speed") {
+  ViewerState v = two_channels(7);
+  v.tick(100.0);
+  v.handle_key(ViewerKey::kPlayPause);
+  CHECK(v.playback().playing());
+  // 10 timepoints/s: frames every 40 ms show 0, 0, 1, 1, 2, ... never back, never beyond the last.
+  std::vector<uint32_t> shown;
+  uint64_t revision = v.revision();
+  for (int i = 0; i <= 25; ++i) {
+    v.tick(100.0 + 0.04 * i);
+    if (shown.empty() || shown.back() != v.scene().timepoint) {
+      shown.push_back(v.scene().timepoint);
+      if (shown.size() > 1) CHECK(v.revision() > revision);  // the renderer hears of each new timepoint
+      revision = v.revision();
+    }
+  }
+  CHECK(shown == std::vector<uint32_t>{0, 1, 2, 3, 4, 5, 6});
+  CHECK_FALSE(v.playback().playing());  // not looping: stops at the last
+  // Space at the end starts over; '.' pauses and steps; ',' steps back. (Keys act at the latest tick.)
+  v.tick(110.0);
+  v.handle_key(ViewerKey::kPlayPause);
+  v.tick(110.0);
+  CHECK(v.scene().timepoint == 0);
+  v.tick(110.15);
+  CHECK(v.scene().timepoint == 1);
+  v.handle_key(ViewerKey::kStepForward);
+  CHECK_FALSE(v.playback().playing());
+  CHECK(v.scene().timepoint == 2);
+  v.tick(111.0);
+  CHECK(v.scene().timepoint == 2);
+  v.handle_key(ViewerKey::kStepBack);
+  v.handle_key(ViewerKey::kStepBack);
+  v.handle_key(ViewerKey::kStepBack);
+  CHECK(v.scene().timepoint == 0);  // clamped without looping
+  // ']' doubles the speed: 20 timepoints/s.
+  v.handle_key(ViewerKey::kFaster);
+  CHECK(v.playback().speed() == 2.0);
+  v.tick(112.0);
+  v.handle_key(ViewerKey::kPlayPause);
+  v.tick(112.0);
+  v.tick(112.101);
+  CHECK(v.scene().timepoint == 2);
+  v.handle_key(ViewerKey::kSlower);
+  v.handle_key(ViewerKey::kSlower);
+  CHECK(v.playback().speed() == 0.5);
+  // A timepoint set by hand (slider, arrows, "time") pauses and playback goes on from there.
+  REQUIRE(v.set_timepoint(5).is_ok());
+  CHECK_FALSE(v.playback().playing());
+  CHECK(v.playback().timepoint() == 5);
+  REQUIRE(v.apply_command("loop on").is_ok());
+  REQUIRE(v.apply_command("speed 1").is_ok());
+  v.tick(113.0);
+  REQUIRE(v.apply_command("play").is_ok());
+  v.tick(113.0);
+  CHECK(v.scene().timepoint == 5);
+  v.tick(113.101);
+  CHECK(v.scene().timepoint == 6);
+  v.tick(113.201);
+  CHECK(v.scene().timepoint == 0);  // looping wraps
+  REQUIRE(v.apply_command("pause").is_ok());
+  v.tick(120.0);
+  CHECK(v.scene().timepoint == 0);
+  CHECK_FALSE(v.apply_command("speed 100").is_ok());
+  CHECK_FALSE(v.apply_command("loop maybe").is_ok());
+  ViewerState one = two_channels(1);
+  CHECK(one.apply_command("play").message().find("nothing to play") != std::string::npos);
+}
+
+TEST_CASE("viewer state: a card's camera goes back to the orbit that made it, restore checks the card") {
+  ViewerState v = two_channels(4);
+  v.orbit_drag(120, -80);
+  v.pan_drag(30, 10, 600);
+  v.zoom(2);
+  const OrbitCamera made = v.orbit();
+  CameraState world = made.camera();
+  for (int i = 0; i < 3; ++i) {  // as viewer_world_camera stores it: longest side 2.5 world units
+    world.eye[i] *= 2.5;
+    world.target[i] *= 2.5;
+  }
+  const OrbitCamera back = orbit_for_camera(world, 2.5);
+  CHECK(back.distance == doctest::Approx(made.distance));
+  CHECK(back.yaw == doctest::Approx(made.yaw));
+  CHECK(back.pitch == doctest::Approx(made.pitch));
+  for (int i = 0; i < 3; ++i) CHECK(back.focus[i] == doctest::Approx(made.focus[i]));
+  CHECK(dist(back.camera().up, made.camera().up) < 1e-9);
+
+  ViewerState w = two_channels(4);
+  RenderSettings one_channel;
+  one_channel.channels.resize(1);
+  CHECK_FALSE(w.restore(one_channel, 1, back).is_ok());  // another channel count
+  RenderSettings saved = v.render();
+  saved.channels[1].colormap = "viridis";
+  CHECK_FALSE(w.restore(saved, 4, back).is_ok());  // no such timepoint
+  CHECK(w.orbit() == two_channels(4).orbit());     // refused: nothing changed
+  REQUIRE(w.apply_command("play").is_ok());
+  REQUIRE(w.restore(saved, 3, back).is_ok());
+  CHECK(w.render() == saved);
+  CHECK(w.scene().timepoint == 3);
+  CHECK(w.playback().timepoint() == 3);
+  CHECK_FALSE(w.playback().playing());
+  CHECK(w.orbit().distance == doctest::Approx(made.distance));
+}
+
 TEST_CASE("viewer state: script commands drive the same edits and bad lines are named") {
   ViewerState v = two_channels();
   REQUIRE(v.apply_command("colormap 1 magma").is_ok());
@@ -223,6 +326,12 @@ TEST_CASE("viewer keys: GLFW presses map to viewer keys, releases and repeats of
   CHECK(viewer_key_from_glfw(GLFW_KEY_R, GLFW_PRESS) == ViewerKey::kResetView);
   CHECK(viewer_key_from_glfw(GLFW_KEY_2, GLFW_PRESS) == ViewerKey::kAxisY);
   CHECK(viewer_key_from_glfw(GLFW_KEY_RIGHT, GLFW_REPEAT) == ViewerKey::kTimeNext);
+  CHECK(viewer_key_from_glfw(GLFW_KEY_SPACE, GLFW_PRESS) == ViewerKey::kPlayPause);
+  CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_SPACE, GLFW_REPEAT).has_value());
+  CHECK(viewer_key_from_glfw(GLFW_KEY_PERIOD, GLFW_REPEAT) == ViewerKey::kStepForward);
+  CHECK(viewer_key_from_glfw(GLFW_KEY_COMMA, GLFW_PRESS) == ViewerKey::kStepBack);
+  CHECK(viewer_key_from_glfw(GLFW_KEY_RIGHT_BRACKET, GLFW_PRESS) == ViewerKey::kFaster);
+  CHECK(viewer_key_from_glfw(GLFW_KEY_LEFT_BRACKET, GLFW_PRESS) == ViewerKey::kSlower);
   CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_H, GLFW_REPEAT).has_value());
   CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_Z, GLFW_PRESS).has_value());
 }

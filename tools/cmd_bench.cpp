@@ -5,6 +5,7 @@
 
 namespace vxr::bench {
 void add_movie_bench(CLI::App& bench, cli::Invocation& inv);  // bench_movie.cpp
+void add_desktop_bench(CLI::App& bench, cli::Invocation& inv);  // bench_desktop.cpp
 }
 
 namespace vxr::cli {
@@ -21,6 +22,7 @@ void add_bench_command(CLI::App& app, Invocation& inv) {
   bench::add_stability_bench(*bench, inv);
   bench::add_accuracy_bench(*bench, inv);
   bench::add_movie_bench(*bench, inv);
+  bench::add_desktop_bench(*bench, inv);
 }
 
 }  // namespace vxr::cli

@@ -18,6 +18,7 @@
 #include "core/output_file.h"
 #include "render/annotation_renderer.h"
 #include "render/volume_session.h"
+#include "xr/desktop/viewer_setup.h"
 #include "xr/headless/headless_target.h"
 #include "xr/headless/movie.h"
 #include "xr/target_factory.h"
@@ -43,10 +44,75 @@ struct Options {
   std::string json;
   std::string movie;
   double fps = 30.0;
+  bool no_ui = false;
+  std::string ui_script;
   SessionFlags flags;
   std::string card;  // STORE:ID or ID
   bool lod_bias_given = false;
 };
+
+// The value range the window/level sliders span: the dtype's, or around the
+// window for float data.
+std::array<double, 2> slider_range(const VolumeInfo& info, const RenderSettings& s) {
+  switch (info.dtype) {
+    case DType::kU8: return {0.0, 255.0};
+    case DType::kI8: return {-128.0, 127.0};
+    case DType::kU16: return {0.0, 65535.0};
+    case DType::kI16: return {-32768.0, 32767.0};
+    case DType::kU32: return {0.0, 4294967295.0};
+    case DType::kI32: return {-2147483648.0, 2147483647.0};
+    case DType::kF32: break;
+  }
+  double lo = 0.0, hi = 1.0;
+  for (const ChannelSettings& c : s.channels) {
+    lo = std::min(lo, c.window_lo);
+    hi = std::max(hi, c.window_hi);
+  }
+  const double pad = hi - lo;
+  return {lo - pad, hi + pad};
+}
+
+// The desktop viewer's setup: panels over the session's settings, the UI
+// script checked against them, the annotation store (--annotations or the project's) for the tools.
+Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, const VolumeSession& session,
+                                                            const xr::VolumeTransform& transform,
+                                                            const VolumePlacement& placement,
+                                                            const std::optional<Scene>& card) {
+  auto setup = std::make_shared<xr::ViewerSetup>();
+  const VolumeInfo& info = session.source->info();
+  setup->dataset = o.sample || o.input.empty() ? std::string("sample (MRI head)")
+                                               : std::filesystem::path(o.input).filename().string();
+  if (setup->dataset.empty()) setup->dataset = o.input;  // a folder given with a trailing slash
+  std::error_code ec;
+  setup->scene.volume = o.sample || o.input.empty() || o.input.rfind("procedural:", 0) == 0
+                            ? o.input
+                            : std::filesystem::absolute(o.input, ec).string();
+  setup->scene.render = card ? card->render : session.settings;  // a card's settings and timepoint, as --card shows
+  if (card) setup->scene.timepoint = card->timepoint;
+  setup->timepoints = info.timepoints;
+  setup->data_range = slider_range(info, session.settings);
+  setup->placement = placement;
+  setup->transform = transform;
+  for (uint32_t c = 0; c < std::max<size_t>(1, session.settings.channels.size()) && c < info.channels; ++c) {
+    auto histogram = xr::coarse_histogram(*session.source, c, 0, setup->data_range);
+    if (!histogram) return histogram.status();
+    setup->histograms.push_back(std::move(histogram).value());
+  }
+  // --annotations (or the project's store): the viewer's tools edit it.
+  const std::string& store_path = session.annotation_store;
+  if (!store_path.empty()) {
+    auto store = annotate::AnnotationStore::open(store_path, true);
+    if (!store) return Status(store.status().code(), store_path + ": " + store.status().message());
+    setup->store = std::move(store).value();
+  }
+  if (!o.ui_script.empty()) {
+    const xr::ViewerState state(setup->scene, setup->timepoints, setup->data_range);
+    auto script = xr::load_ui_script(o.ui_script, state, {o.input, o.ui_script, store_path}, setup->store != nullptr);
+    if (!script) return script.status();
+    setup->script = std::move(script).value();
+  }
+  return std::shared_ptr<const xr::ViewerSetup>(std::move(setup));
+}
 
 // --movie: a scratch folder for the frames, beside the movie ("<dir>/.<name>.frames.XXXXXX").
 Result<std::string> movie_scratch_dir(const std::string& movie) {
@@ -98,6 +164,9 @@ int run(const Options& given) {
       return fail(unsupported(o.movie + ": writing MP4 needs ffmpeg, which is not installed (apt-get install "
                                         "ffmpeg); or write the PNG sequence with --png-dir DIR --png-every-frame"));
   }
+  if (!o.ui_script.empty() && !o.force_desktop)
+    return fail(invalid_argument("--ui-script runs in the desktop window: add --desktop"), kExitUsage);
+  if (!o.ui_script.empty() && o.no_ui) return fail(invalid_argument("--ui-script and --no-ui: give one"), kExitUsage);
   auto session = open_volume_session(o.sample ? "" : o.input, o.flags);
   if (!session) {
     const ErrorCode c = session.status().code();  // a wrong path or argument is a usage error
@@ -142,6 +211,26 @@ int run(const Options& given) {
   const VolumeInfo& info = session->source->info();
   const VolumePlacement placement{{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])},
                                   info.voxel_size};
+  const xr::VolumeTransform start = xr::default_volume_transform(placement);
+  if (!o.no_ui && o.movie.empty() && !o.force_xr && !o.force_headless) {
+    auto setup = viewer_setup(o, *session, start, placement, card);
+    if (!setup) {
+      const ErrorCode c = setup.status().code();
+      return fail(setup.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage
+                                                                                                  : kExitFailure);
+    }
+    req.viewer = *setup;
+    // The window opens at the size it had last time (1280x800 at first) unless given.
+    if (!o.width && !o.height && !o.stereo) {
+      const std::string config = xr::viewer_config_path();
+      auto size = config.empty() ? Result<xr::WindowGeometry>(xr::WindowGeometry{}) : xr::load_window_geometry(config);
+      if (!size) std::fprintf(stderr, "vxr view: %s (using 1280x800)\n", size.status().message().c_str());
+      const xr::WindowGeometry g = size ? *size : xr::WindowGeometry{};
+      req.headless.script.width = g.width;
+      req.headless.script.height = g.height;
+    }
+  }
+
   if (card) {
     if (card->timepoint >= info.timepoints)
       return fail(invalid_argument("--card: timepoint " + std::to_string(card->timepoint) + ", but " + o.input +
@@ -172,12 +261,14 @@ int run(const Options& given) {
   vo.frame.lod.lod_bias = o.lod_bias;
   vo.frame.lod.timepoint = card ? card->timepoint : 0;
   vo.frame_budget_ms = o.frame_budget_ms;
-  if (!session->annotation_store.empty()) {
+  // The desktop viewer holds the store open itself (its tools edit it) and draws its markers over the volume.
+  const bool viewer_has_store = req.viewer && req.viewer->store;
+  if (!session->annotation_store.empty() && !viewer_has_store) {
     auto annotations = load_annotation_scene(session->annotation_store, placement, vo.frame.lod.timepoint);
     if (!annotations) return fail(annotations.status());
     vo.annotations = std::move(annotations).value();
   }
-  auto stats = xr::run_view(choice->factory, session->source, vo, xr::default_volume_transform(placement));
+  auto stats = xr::run_view(choice->factory, session->source, vo, start);
   if (!stats) return fail(stats.status());
   if (!o.movie.empty()) {
     if (Status st = xr::encode_movie(movie_frames, o.fps, o.movie); !st) return fail(st);
@@ -233,6 +324,10 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--movie", o->movie,
                   "headless: render the pose script's camera path (one view) and write it as an MP4 (needs ffmpeg)");
   cmd->add_option("--fps", o->fps, "--movie: frames per second (default 30)")->check(CLI::Range(0.001, 1000.0));
+  cmd->add_flag("--no-ui", o->no_ui, "desktop: the bare window, without panels");
+  cmd->add_option("--ui-script", o->ui_script,
+                  "desktop: run this scripted session (JSON list of steps: viewer commands, play/pause, screenshot "
+                  "PATH, count, measure, tool, click, card; see xr/desktop/ui_script.h), then close");
   add_annotations_option(cmd, o->flags.annotations);
   cmd->add_option("--card", o->card,
                   "STORE:ID (or ID of the --annotations store or the input project's): restore a card's volume, "

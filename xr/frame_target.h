@@ -11,6 +11,7 @@
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +20,12 @@
 #include "gpu/context.h"
 #include "render/camera.h"
 #include "xr/pose.h"
+
+namespace vxr {
+struct RenderSettings;  // scene/render_settings.h (not included: its VolumeTransform is not xr's)
+class ChunkCache;
+class ChunkSource;
+}
 
 namespace vxr::xr {
 
@@ -53,6 +60,17 @@ struct FrameState {
   int64_t display_time_ns = 0;  // predicted display time (OpenXR) or a steady clock
   std::vector<ViewSpec> views;  // filled when should_render
   InputState input;
+  // A target with its own controls (the desktop viewer's panels) says what to
+  // draw this frame (settings and timepoint); empty: the session's.
+  std::shared_ptr<const RenderSettings> settings;
+  uint32_t timepoint = 0;
+};
+
+// Semaphores the frame's one submission waits on and signals, for targets
+// that record into their own images after the views (a window's swapchain).
+struct FrameSubmit {
+  std::vector<VkSemaphore> wait;
+  std::vector<VkSemaphore> signal;
 };
 
 // What the frame showed, for targets that hand depth to a compositor.
@@ -80,6 +98,13 @@ class FrameTarget {
   virtual Result<FrameState> wait_frame() = 0;
   // The image to render view `view` of the current frame into.
   virtual Result<TargetImage> acquire(size_t view) = 0;
+  // Records what the target draws after every view into the frame's one
+  // command buffer (the desktop window: eyes blitted into the swapchain
+  // image, then its panels) and adds the semaphores that submission needs.
+  virtual Status record_after_views(VkCommandBuffer cmd, FrameSubmit& submit) {
+    (void)cmd, (void)submit;
+    return Status::ok();
+  }
   // Releases the images and submits or presents the frame.
   virtual Status end_frame(const FrameState& frame, const FrameContent& content) = 0;
 
@@ -93,6 +118,9 @@ class FrameTarget {
   }
   // Destroys everything tied to the device; called before the context dies.
   virtual void detach() = 0;
+  // The chunk cache the renderer streams from (null: gone) and its source;
+  // the desktop viewer prefetches the timepoints playback needs next into it.
+  virtual void use_chunk_cache(ChunkCache* cache, const ChunkSource* source) { (void)cache, (void)source; }
 };
 
 }  // namespace vxr::xr

@@ -15,6 +15,7 @@ DesktopOptions desktop_options(const TargetRequest& r) {
   o.stereo = r.desktop_stereo;
   o.end_frame = r.headless.end_frame;
   o.screenshot_path = r.desktop_screenshot;
+  o.viewer = r.viewer;
   return o;
 }
 
@@ -28,6 +29,7 @@ TargetFactory openxr_factory(const TargetRequest& r) {
   window.stereo = true;  // both eyes side by side
   window.srgb_swapchain = true;  // the headset's swapchains are sRGB when the runtime offers it
   window.end_frame = 0;
+  window.viewer = nullptr;  // the mirror shows the headset's eyes as they are
   return [o, mirror, window]() -> Result<std::unique_ptr<FrameTarget>> {
     auto t = OpenXrTarget::create(o);
     if (!t) return t.status();

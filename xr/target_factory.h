@@ -2,12 +2,15 @@
 // implementation (hello_xr's platform/graphics plugin factory, one axis).
 #pragma once
 
+#include <memory>
 #include <string>
 
 #include "xr/headless/headless_target.h"
 #include "xr/view_session.h"
 
 namespace vxr::xr {
+
+struct ViewerSetup;  // xr/desktop/viewer_setup.h
 
 enum class TargetKind { kAuto, kOpenXr, kDesktop, kHeadless };
 
@@ -18,6 +21,7 @@ struct TargetRequest {
   bool mirror = false;              // OpenXR: also show the eye images in a desktop window
   std::string desktop_screenshot;  // desktop: grab the window from the X server into this PNG at exit
   uint32_t max_eye_width = 0, max_eye_height = 0;  // OpenXR: clamp the runtime's eye size
+  std::shared_ptr<const ViewerSetup> viewer;       // desktop: panels and controls (null: the bare window)
 };
 
 struct TargetChoice {

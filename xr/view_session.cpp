@@ -48,11 +48,17 @@ struct FrameCommands {
   }
   // Submits and waits: the swapchain images are released (and the next frame
   // reuses the renderer's per-frame buffers) only after the rays have run.
-  Status submit_and_wait(gpu::Context& ctx) {
+  Status submit_and_wait(gpu::Context& ctx, const FrameSubmit& sync) {
     VXR_VK_TRY(vkEndCommandBuffer(cmd));
     VkFence f = fence;
     VXR_VK_TRY(vkResetFences(ctx.device(), 1, &f));
+    const std::vector<VkPipelineStageFlags> stages(sync.wait.size(), VK_PIPELINE_STAGE_ALL_COMMANDS_BIT);
     VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    si.waitSemaphoreCount = uint32_t(sync.wait.size());
+    si.pWaitSemaphores = sync.wait.data();
+    si.pWaitDstStageMask = stages.data();
+    si.signalSemaphoreCount = uint32_t(sync.signal.size());
+    si.pSignalSemaphores = sync.signal.data();
     si.commandBufferCount = 1;
     si.pCommandBuffers = &cmd;
     VXR_VK_TRY(vkQueueSubmit(ctx.queue(), 1, &si, f));
@@ -77,7 +83,13 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
   std::unique_ptr<EyeRenderer> eyes;
   Detach detach{target};
   ChunkCache cache(source, {options.cache_bytes, options.loader_threads});
+  struct CacheHook {  // the target lets go of the cache before it dies
+    FrameTarget& t;
+    ~CacheHook() { t.use_chunk_cache(nullptr, nullptr); }
+  };
+  CacheHook cache_hook{target};
   VXR_RETURN_IF_ERROR(target.attach(*ctx));
+  target.use_chunk_cache(&cache, source.get());
   VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, source, &cache, options.channels));
   VXR_RETURN_IF_ERROR(eyes->set_annotations(options.annotations));
   // Pool changes the settings need (apron 2 for gradients) before any frame records.
@@ -86,6 +98,8 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
   stats.target = target.describe();
 
   bool exit_requested = false;
+  // The settings the last frame drew: a target's edits are checked once, when they change.
+  RenderSettings drawn_settings = options.settings;
   int64_t last_display_ns = 0;
   double total_ms = 0.0;
   for (;;) {
@@ -110,6 +124,17 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
 
     BrickFrameSettings fs = options.frame;
     if (options.frame_budget_ms > 0.0) fs.lod.lod_bias = budget.bias;
+    if (frame->settings) fs.lod.timepoint = std::min(frame->timepoint, source->info().timepoints - 1);
+    if (frame->settings && !(*frame->settings == drawn_settings)) {
+      // An edit the brick renderer cannot draw keeps the last picture and says why.
+      Status ok = check_brick_settings(*frame->settings, eyes->renderer().channels());
+      if (ok) ok = eyes->renderer().prepare(*frame->settings);
+      if (ok)
+        drawn_settings = *frame->settings;
+      else
+        log_warn("view: settings not applied: " + ok.message());
+    }
+    const RenderSettings& settings = drawn_settings;
     size_t views_drawn = 0;
     uint64_t missing = 0;
     if (frame->should_render) {
@@ -120,14 +145,17 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
         if (!image) return target.wants_restart() ? Result<Outcome>(Outcome::kRestart) : image.status();
         uint64_t rays = 0;
         BrickFrameStats st;
-        VXR_RETURN_IF_ERROR(eyes->record(commands.cmd, v, frame->views[v], stats.transform, options.settings, fs,
+        VXR_RETURN_IF_ERROR(eyes->record(commands.cmd, v, frame->views[v], stats.transform, settings, fs,
                                          options.warp, *image, &rays, &st));
         stats.rays += rays;
         missing += st.lod.missing;
         if (v == 0) stats.bricks_uploaded += st.bricks_uploaded;
         ++views_drawn;
       }
-      VXR_RETURN_IF_ERROR(commands.submit_and_wait(*ctx));
+      FrameSubmit sync;
+      if (Status s = target.record_after_views(commands.cmd, sync); !s)
+        return target.wants_restart() ? Result<Outcome>(Outcome::kRestart) : Result<Outcome>(s);
+      VXR_RETURN_IF_ERROR(commands.submit_and_wait(*ctx, sync));
     }
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     FrameContent content;
@@ -140,6 +168,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
       total_ms += ms;
       stats.frame_ms.push_back(ms);
       stats.lod_bias.push_back(fs.lod.lod_bias);
+      stats.frame_missing.push_back(missing);
       stats.max_frame_ms = std::max(stats.max_frame_ms, ms);
       stats.mean_frame_ms = total_ms / double(stats.frame_ms.size());
       if (views_drawn == frame->views.size() && views_drawn > 0) {

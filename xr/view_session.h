@@ -5,8 +5,11 @@
 //     -> attach -> chunk cache (loader threads) + eye renderer
 //     frame loop: wait_frame -> interaction -> ONE command buffer: brick
 //                 uploads that arrived, then every view (lens warp
-//                 included) recorded into the target's images -> one submit
-//                 -> end_frame
+//                 included) recorded into the target's images, then what
+//                 the target draws itself (record_after_views: the desktop
+//                 viewer's blit and panels) -> one submit -> end_frame
+//   a target with its own controls (FrameState::settings) changes the
+//   settings and timepoint the next views are drawn with
 //   a lost session/instance (wants_restart) tears everything down in order
 //   and starts again; any other error ends the run with its message.
 //
@@ -62,6 +65,7 @@ struct ViewStats {
   double max_frame_ms = 0.0;
   std::vector<double> frame_ms;  // every rendered frame's time, in order
   std::vector<double> lod_bias;  // the LOD bias each rendered frame used
+  std::vector<uint64_t> frame_missing;  // bricks each rendered frame drew from an ancestor (still streaming)
   uint64_t rays = 0;
   uint64_t pipelines_first_frame = 0;        // pipelines built up to the end of frame 1
   uint64_t pipelines_after_first_frame = 0;  // built after it (poses must build none)

@@ -5,17 +5,44 @@
 // --stereo shows both eyes side by side (the paper's on-monitor side-by-side
 // picture). The eye images are ordinary device images; end_frame blits them
 // into the window's swapchain image and presents.
+//
+// With a ViewerSetup the window is the viewer: Dear ImGui panels over a
+// ViewerState (xr/desktop/viewer_state.h) that says what the renderer draws
+// each frame, the orbit camera from the mouse, keys through the key callback,
+// the title "vxr - DATASET - N ms", markers and measurements of the store drawn
+// over the volume, and an optional UI script. The eyes are then blitted and
+// the panels drawn into the swapchain image in the frame's own command buffer
+// (record_after_views), and only a screenshot reads anything back.
 #pragma once
 
+#include <array>
+#include <chrono>
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "core/output_file.h"
 #include "gpu/resources.h"
+#include "scene/render_settings.h"
+#include "volume/playback.h"
 #include "xr/frame_target.h"
 
 struct GLFWwindow;
 
 namespace vxr::xr {
+
+struct ViewerSetup;  // xr/desktop/viewer_setup.h
+class ViewerState;
+class ImGuiLayer;
+class UiScriptRunner;
+class ViewerTools;
+struct ToolPanel;
+
+// A marker or measurement end in voxels, with its colour (the overlay draws it).
+struct OverlayPoint {
+  std::array<double, 3> voxel;
+  std::array<double, 4> color;
+};
 
 struct DesktopOptions {
   uint32_t width = 256, height = 256;  // per eye
@@ -29,6 +56,7 @@ struct DesktopOptions {
   // an sRGB headset swapchain, and a mirror's blit copies the encoded bytes
   // unchanged (decode + encode).
   bool srgb_swapchain = true;
+  std::shared_ptr<const ViewerSetup> viewer;  // null: the bare window (no panels)
 };
 
 // Why there is no usable window system (no DISPLAY, GLFW or Vulkan surface
@@ -45,9 +73,11 @@ class DesktopTarget : public FrameTarget {
   Status attach(gpu::Context& ctx) override;
   Result<FrameState> wait_frame() override;
   Result<TargetImage> acquire(size_t view) override;
+  Status record_after_views(VkCommandBuffer cmd, FrameSubmit& submit) override;
   Status end_frame(const FrameState& frame, const FrameContent& content) override;
   void request_exit() override { exit_requested_ = true; }
   void detach() override;
+  void use_chunk_cache(ChunkCache* cache, const ChunkSource* source) override;
 
   // Mouse and keyboard navigation (called from GLFW callbacks).
   void on_drag(double dx, double dy);
@@ -62,10 +92,25 @@ class DesktopTarget : public FrameTarget {
   Status screenshot();
 
  private:
-  explicit DesktopTarget(const DesktopOptions& o) : o_(o) {}
+  explicit DesktopTarget(const DesktopOptions& o);
   Status create_swapchain();
   void destroy_swapchain();
+  Status recreate_swapchain();
+  Status create_eyes();
+  Status follow_window_size();
   Pose head_pose() const;
+  // The viewer's frame: script steps, panels, overlay, settings and views.
+  Status viewer_frame(FrameState& f);
+  void draw_annotation_overlay(const ViewSpec& view);
+  Status write_screenshot();
+  void on_viewer_cursor(double dx, double dy);
+  // A left click at window pixel (x, y): the tools panel's tool places there.
+  void on_viewer_click(double x, double y);
+  // The voxel under window pixel (x, y) on the plane through the orbit centre facing the camera.
+  std::array<double, 3> voxel_under(double x, double y) const;
+  Scene card_scene() const;
+  Status save_panel_card(const std::string& png_path);
+  Status restore_card(uint64_t id);
 
   DesktopOptions o_;
   GLFWwindow* window_ = nullptr;
@@ -86,6 +131,37 @@ class DesktopTarget : public FrameTarget {
   glm::dvec3 focus_{0.0, 1.6, -0.5};
   double yaw_ = 0.0, pitch_ = 0.0, distance_ = 0.5;
   bool have_focus_ = false;
+
+  // The viewer (o_.viewer set).
+  std::unique_ptr<ViewerState> state_;
+  std::unique_ptr<ImGuiLayer> ui_;
+  std::unique_ptr<UiScriptRunner> script_;
+  std::shared_ptr<const RenderSettings> drawn_settings_;  // handed to the frame loop; new when the state changed
+  uint64_t drawn_revision_ = UINT64_MAX;
+  bool nothing_visible_ = false;
+  bool resized_ = false;       // the framebuffer size changed since the last frame
+  bool user_resized_ = false;  // ... at least once: remember the size at exit  // every channel hidden: the window is cleared, no rays cast
+  std::chrono::steady_clock::time_point last_frame_start_{};
+  double frame_ms_ = 0.0;
+  // This frame's swapchain image (acquired in record_after_views).
+  bool image_acquired_ = false;
+  uint32_t image_index_ = 0;
+  // Screenshot of this frame's swapchain image: a host buffer the frame copies into.
+  std::string screenshot_pending_;
+  gpu::Buffer screenshot_buffer_;
+  // The store's markers and measurements, read again after each script edit.
+  uint64_t overlay_revision_ = UINT64_MAX;
+  std::vector<OverlayPoint> overlay_points_;
+  std::vector<std::array<OverlayPoint, 2>> overlay_lines_;
+  std::unique_ptr<ViewerTools> tools_;  // with a store
+  std::unique_ptr<ToolPanel> panel_;
+  double press_x_ = 0, press_y_ = 0;
+  bool press_on_ui_ = false;
+  std::string card_shot_;  // the panel asked for a card: this frame's picture goes here first
+  std::unique_ptr<TempFile> card_temp_;  // that picture when no script screenshot was due
+  std::string click_error_;              // the last click's refusal (a script stops on it)
+  uint32_t drawn_timepoint_ = 0;          // the frame's (a screenshot's log line names it)
+  std::vector<TimepointPrefetcher> prefetch_;  // playback: one per channel of the view, into run_view's cache
 };
 
 }  // namespace vxr::xr

@@ -18,6 +18,11 @@ std::optional<ViewerKey> viewer_key_from_glfw(int key, int action) {
     case GLFW_KEY_C: return repeat ? std::nullopt : std::optional(ViewerKey::kNextColormap);
     case GLFW_KEY_RIGHT: return ViewerKey::kTimeNext;
     case GLFW_KEY_LEFT: return ViewerKey::kTimePrev;
+    case GLFW_KEY_SPACE: return repeat ? std::nullopt : std::optional(ViewerKey::kPlayPause);
+    case GLFW_KEY_COMMA: return ViewerKey::kStepBack;
+    case GLFW_KEY_PERIOD: return ViewerKey::kStepForward;
+    case GLFW_KEY_LEFT_BRACKET: return repeat ? std::nullopt : std::optional(ViewerKey::kSlower);
+    case GLFW_KEY_RIGHT_BRACKET: return repeat ? std::nullopt : std::optional(ViewerKey::kFaster);
     case GLFW_KEY_H:
     case GLFW_KEY_F1: return repeat ? std::nullopt : std::optional(ViewerKey::kToggleHelp);
     case GLFW_KEY_TAB: return repeat ? std::nullopt : std::optional(ViewerKey::kToggleUi);

@@ -49,12 +49,30 @@ CameraState OrbitCamera::camera() const {
   return c;
 }
 
+OrbitCamera orbit_for_camera(const CameraState& c, double unit) {
+  OrbitCamera o;
+  std::array<double, 3> back;
+  for (int i = 0; i < 3; ++i) {
+    o.focus[i] = c.target[i] / unit;
+    back[i] = (c.eye[i] - c.target[i]) / unit;
+  }
+  o.distance = std::sqrt(back[0] * back[0] + back[1] * back[1] + back[2] * back[2]);
+  if (o.distance > 0) {
+    o.pitch = std::asin(std::clamp(back[1] / o.distance, -1.0, 1.0));
+    o.yaw = std::atan2(back[0], back[2]);
+  }
+  o.fov_y_deg = c.fov_y_deg;
+  return o;
+}
+
 const std::vector<ShortcutHelp>& viewer_shortcuts() {
   static const std::vector<ShortcutHelp> table = {
       {"Left drag", "orbit"},           {"Right / middle drag", "pan"},
       {"Wheel", "zoom"},                {"R", "reset view"},
       {"1 / 2 / 3", "view along x / y / z"}, {"M", "next optical model"},
       {"C", "next colour map (channel 0)"},  {"Left / Right", "previous / next timepoint"},
+      {"Space", "play / pause the timepoints"}, {", / .", "step one timepoint back / on (pauses)"},
+      {"[ / ]", "play slower / faster"},
       {"H or F1", "show / hide this help"},  {"Tab", "show / hide the panels"},
       {"Esc", "quit"},
   };
@@ -62,7 +80,8 @@ const std::vector<ShortcutHelp>& viewer_shortcuts() {
 }
 
 ViewerState::ViewerState(Scene scene, uint32_t timepoints, std::array<double, 2> data_range)
-    : scene_(std::move(scene)), timepoints_(std::max<uint32_t>(timepoints, 1)), data_range_(data_range) {
+    : scene_(std::move(scene)), timepoints_(std::max<uint32_t>(timepoints, 1)), data_range_(data_range),
+      clock_(timepoints_) {
   if (scene_.render.channels.empty()) scene_.render.channels.emplace_back();
   if (!(data_range_[1] > data_range_[0])) data_range_ = {data_range_[0], data_range_[0] + 1.0};
   // The whole volume (longest side 1 in world units) fits the view.
@@ -70,6 +89,7 @@ ViewerState::ViewerState(Scene scene, uint32_t timepoints, std::array<double, 2>
   home_.distance = 0.75 / std::tan(home_.fov_y_deg * kPi / 360.0);
   orbit_ = home_;
   scene_.timepoint = std::min(scene_.timepoint, timepoints_ - 1);
+  clock_.step(int(scene_.timepoint), 0.0);
 }
 
 Status ViewerState::check_channel(size_t channel) const {
@@ -181,10 +201,42 @@ Status ViewerState::set_timepoint(uint32_t t) {
   if (t >= timepoints_)
     return out_of_range("timepoint " + std::to_string(t) + " does not exist (" + std::to_string(timepoints_) +
                         " timepoints)");
+  clock_.step(int(t) - int(clock_.timepoint()), now_s_);
   if (scene_.timepoint != t) {
     scene_.timepoint = t;
     changed();
   }
+  return Status::ok();
+}
+
+void ViewerState::tick(double now_s, const std::function<bool(uint32_t)>& ready) {
+  now_s_ = now_s;
+  if (!clock_.playing()) return;
+  const PlaybackFrame f = clock_.tick(now_s, ready);
+  if (f.timepoint != scene_.timepoint) {
+    scene_.timepoint = f.timepoint;
+    changed();
+  }
+}
+
+void ViewerState::play() {
+  if (timepoints_ > 1) clock_.play(now_s_);
+}
+
+void ViewerState::pause() { clock_.pause(now_s_); }
+
+void ViewerState::step_time(int delta) {
+  clock_.step(delta, now_s_);
+  if (clock_.timepoint() != scene_.timepoint) {
+    scene_.timepoint = clock_.timepoint();
+    changed();
+  }
+}
+
+Status ViewerState::set_speed(double speed) {
+  if (!(speed >= 1.0 / 16.0 && speed <= 16.0))
+    return out_of_range("playback speed " + std::to_string(speed) + " is outside 1/16 .. 16");
+  clock_.set_speed(speed, now_s_);
   return Status::ok();
 }
 
@@ -230,6 +282,24 @@ Status ViewerState::axis_view(int axis) {
   return Status::ok();
 }
 
+Status ViewerState::restore(const RenderSettings& render, uint32_t timepoint, const OrbitCamera& orbit) {
+  if (render.channels.size() != scene_.render.channels.size())
+    return invalid_argument("the card draws " + std::to_string(render.channels.size()) + " channel(s), this view " +
+                            std::to_string(scene_.render.channels.size()));
+  if (timepoint >= timepoints_)
+    return out_of_range("the card's timepoint " + std::to_string(timepoint) + " does not exist (" +
+                        std::to_string(timepoints_) + " timepoints)");
+  if (!(orbit.distance > 0) || !std::isfinite(orbit.yaw) || !std::isfinite(orbit.pitch))
+    return invalid_argument("the card's camera cannot be shown as an orbit");
+  scene_.render = render;
+  clock_.step(int(timepoint) - int(clock_.timepoint()), now_s_);
+  scene_.timepoint = timepoint;
+  orbit_ = orbit;
+  orbit_.pitch = std::clamp(orbit_.pitch, -kMaxPitch, kMaxPitch);
+  changed();
+  return Status::ok();
+}
+
 void ViewerState::handle_key(ViewerKey key) {
   switch (key) {
     case ViewerKey::kResetView: reset_view(); break;
@@ -244,6 +314,11 @@ void ViewerState::handle_key(ViewerKey key) {
     case ViewerKey::kTimePrev:
       if (scene_.timepoint > 0) (void)set_timepoint(scene_.timepoint - 1);
       break;
+    case ViewerKey::kPlayPause: clock_.playing() ? pause() : play(); break;
+    case ViewerKey::kStepBack: step_time(-1); break;
+    case ViewerKey::kStepForward: step_time(1); break;
+    case ViewerKey::kSlower: (void)set_speed(std::max(1.0 / 16.0, clock_.speed() / 2.0)); break;
+    case ViewerKey::kFaster: (void)set_speed(std::min(16.0, clock_.speed() * 2.0)); break;
     case ViewerKey::kToggleHelp: help_visible_ = !help_visible_; break;
     case ViewerKey::kToggleUi: ui_visible_ = !ui_visible_; break;
     case ViewerKey::kQuit: quit_requested_ = true; break;
@@ -295,6 +370,21 @@ Status ViewerState::apply_command(const std::string& line) {
   if (cmd == "time") {
     if (!need(1) || !parse_index(w[1], &ch)) return bad("usage: time T");
     return wrap(set_timepoint(static_cast<uint32_t>(ch)));
+  }
+  if (cmd == "play" || cmd == "pause") {
+    if (!need(0)) return bad("usage: " + cmd);
+    if (cmd == "play" && timepoints_ < 2) return bad("one timepoint: nothing to play");
+    cmd == "play" ? play() : pause();
+    return Status::ok();
+  }
+  if (cmd == "speed") {
+    if (!need(1) || !parse_double(w[1], &a)) return bad("usage: speed X (1/16 .. 16)");
+    return wrap(set_speed(a));
+  }
+  if (cmd == "loop") {
+    if (!need(1) || (w[1] != "on" && w[1] != "off")) return bad("usage: loop on|off");
+    set_loop(w[1] == "on");
+    return Status::ok();
   }
   if (cmd == "orbit" || cmd == "pan") {
     if (!need(2) || !parse_double(w[1], &a) || !parse_double(w[2], &b)) return bad("usage: " + cmd + " DX DY");

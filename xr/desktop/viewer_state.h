@@ -11,6 +11,7 @@
 
 #include "core/status.h"
 #include "scene/render_settings.h"
+#include "volume/playback.h"
 
 namespace vxr::xr {
 
@@ -25,10 +26,13 @@ struct OrbitCamera {
   bool operator==(const OrbitCamera&) const = default;
   CameraState camera() const;
 };
+// The orbit whose camera() is `c` scaled by 1 / `unit` (a card's camera in
+// world units back to the viewer's orbit, in units of the volume's longest side).
+OrbitCamera orbit_for_camera(const CameraState& c, double unit);
 
 // Keys the viewer reacts to, independent of the window system.
 enum class ViewerKey { kResetView, kAxisX, kAxisY, kAxisZ, kNextModel, kNextColormap, kTimeNext, kTimePrev,
-                       kToggleHelp, kToggleUi, kQuit };
+                       kPlayPause, kStepBack, kStepForward, kSlower, kFaster, kToggleHelp, kToggleUi, kQuit };
 
 struct ShortcutHelp {
   const char* keys;
@@ -63,7 +67,21 @@ class ViewerState {
   void cycle_model(int direction);
   Status set_step(double step_voxels);
   Status set_density(double density);
+  // Shows timepoint t (pauses playback).
   Status set_timepoint(uint32_t t);
+
+  // Timepoint playback through the PlaybackClock of `vxr play`
+  // (volume/playback.h): the window passes its frame times to tick(); keys,
+  // commands and the panel act at the latest of them.
+  // `ready(t)`: timepoint t's data is loaded (else the clock waits on the current one).
+  void tick(double now_s, const std::function<bool(uint32_t)>& ready = [](uint32_t) { return true; });
+  const PlaybackClock& playback() const { return clock_; }
+  void play();
+  void pause();
+  // By `delta` timepoints, paused (wraps when looping).
+  void step_time(int delta);
+  Status set_speed(double speed);  // 1/16 .. 16
+  void set_loop(bool loop) { clock_.set_loop(loop); }
 
   // Navigation: drags in pixels of a view `view_height` pixels tall.
   const OrbitCamera& orbit() const { return orbit_; }
@@ -75,6 +93,10 @@ class ViewerState {
   Status axis_view(int axis);
   CameraState camera() const { return orbit_.camera(); }
 
+  // Back to what a card saved: its settings (same channel count), timepoint
+  // and the orbit that shows its camera. Nothing changes when it is refused.
+  Status restore(const RenderSettings& render, uint32_t timepoint, const OrbitCamera& orbit);
+
   // Keys edit the state; quit and the help/UI toggles are only recorded here
   // (the window acts on them).
   void handle_key(ViewerKey key);
@@ -84,7 +106,7 @@ class ViewerState {
 
   // One script/console command, e.g. "colormap 0 viridis", "window 0 10 200",
   // "model mip", "step 0.25", "time 2", "visible 1 off", "orbit 40 0",
-  // "zoom 2", "reset", "view 3". Errors name the command.
+  // "zoom 2", "reset", "view 3", "play", "pause", "speed 2", "loop on". Errors name the command.
   Status apply_command(const std::string& line);
 
  private:
@@ -100,6 +122,8 @@ class ViewerState {
   bool help_visible_ = false;
   bool ui_visible_ = true;
   bool quit_requested_ = false;
+  PlaybackClock clock_;
+  double now_s_ = 0.0;  // the latest tick
 };
 
 // The window size the viewer remembers between runs: a small JSON under

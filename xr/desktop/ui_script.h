@@ -1,0 +1,96 @@
+// `vxr view --desktop --ui-script FILE`: a scripted desktop session, for tests
+// and demos. FILE is a JSON array of steps (or {"steps": [...]}), each a string,
+// run one frame apart, in order; the window closes after the last one.
+//
+//   any viewer command        "colormap 0 viridis", "window 0 10 200", "visible 1 off",
+//                             "model mip", "step 0.5", "time 2", "orbit 40 0", "zoom 2",
+//                             "reset", "view 3", "play", "pause", "speed 0.5", "loop on"
+//                             (ViewerState::apply_command)
+//   ui on|off                 show or hide the panels
+//   wait N                    render N more frames first
+//   resize W H                the window to W x H pixels (the viewer follows it and remembers it)
+//   screenshot PATH           this frame's swapchain image, panels included, as a PNG
+//   count X Y Z [CLASS]       a count marker at voxel (X, Y, Z)      } through the ToolPalette,
+//   measure X Y Z X2 Y2 Z2    a measurement between two voxels       } into --annotations STORE
+//   card TITLE...             a card: the current scene + the last screenshot
+//   tool navigate|count [CLASS]|measure   the tools panel's tool (as if picked there)
+//   click X Y                 a left click at window pixel (X, Y), as the mouse would
+//                             (count: a marker; measure: an end point)
+//   panel-card TITLE...       the tools panel's "save card": this frame's picture and scene
+//   restore-card ID           the tools panel's "restore" of card ID
+//
+// The whole script is checked before the window opens: a bad step is one line
+// naming the file, the step number and the problem.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+#include "xr/desktop/viewer_state.h"
+#include "xr/desktop/viewer_tools.h"
+
+namespace vxr::xr {
+
+enum class UiStepKind { kViewer, kUi, kWait, kResize, kScreenshot, kCount, kMeasure, kCard, kTool, kClick, kPanelCard, kRestoreCard };
+
+struct UiStep {
+  UiStepKind kind = UiStepKind::kViewer;
+  std::string text;                 // as written (viewer commands are applied from it)
+  std::string arg;                  // screenshot path, count class, card title, tool ("count CLASS")
+  std::array<double, 6> xyz{};      // count: 3, measure: 6 voxel coordinates; resize, click: x, y
+  uint64_t frames = 0;              // wait
+  bool on = true;                   // ui
+};
+
+struct UiScript {
+  std::string path;
+  std::vector<UiStep> steps;
+  // "FILE: step N ('TEXT'): WHY": every error about a step reads the same.
+  Status step_error(size_t index, const std::string& why) const;
+};
+
+// Parses FILE and checks every step against a copy of `state` (channels,
+// colour maps, ranges), the screenshot paths against `inputs`
+// (core/output_file.h), and that tools and cards have a store.
+Result<UiScript> load_ui_script(const std::string& path, const ViewerState& state,
+                                const std::vector<std::string>& inputs, bool have_store);
+
+// Runs a script one frame at a time over the viewer's state and the store.
+class UiScriptRunner {
+ public:
+  // `tools`: the store's tools (null without a store); `card_scene`: the
+  // Scene a card stores for the viewer's current state (the window knows the
+  // volume's size and its own).
+  UiScriptRunner(UiScript script, ViewerTools* tools, std::function<Scene(const ViewerState&)> card_scene);
+
+  // What the frame about to be drawn must do besides drawing.
+  struct FrameWork {
+    std::string screenshot;           // read this frame back into this PNG
+    std::array<int, 2> resize{0, 0};  // > 0: resize the window to this
+    bool done = false;                // every step ran: close the window
+    std::string tool;                 // non-empty: the tools panel switches to it ("navigate", "count CLASS", "measure")
+    std::optional<std::array<double, 2>> click;  // a left click at this window pixel (as the mouse would)
+    std::optional<std::string> panel_card;       // "save card" in the tools panel, with this title
+    std::optional<uint64_t> restore_card;        // "restore" of this card in the tools panel
+  };
+  // Applies the steps due before this frame (state edits, tool events).
+  Result<FrameWork> before_frame(ViewerState& state);
+  // After the frame's screenshot was written (cards take the latest).
+  void screenshot_written(const std::string& path) { last_screenshot_ = path; }
+
+ private:
+  Status run_step(const UiStep& step, ViewerState& state);
+
+  UiScript script_;
+  ViewerTools* tools_;
+  std::function<Scene(const ViewerState&)> card_scene_;
+  size_t next_ = 0;
+  uint64_t wait_ = 0;
+  std::string last_screenshot_;
+};
+
+}  // namespace vxr::xr

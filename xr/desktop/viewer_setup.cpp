@@ -1,0 +1,65 @@
+#include "xr/desktop/viewer_setup.h"
+
+#include <cmath>
+#include <cstring>
+
+namespace vxr::xr {
+namespace {
+
+double voxel_value(const uint8_t* p, DType t) {
+  switch (t) {
+    case DType::kU8: return *p;
+    case DType::kI8: return int8_t(*p);
+    case DType::kU16: { uint16_t v; std::memcpy(&v, p, 2); return v; }
+    case DType::kI16: { int16_t v; std::memcpy(&v, p, 2); return v; }
+    case DType::kU32: { uint32_t v; std::memcpy(&v, p, 4); return v; }
+    case DType::kI32: { int32_t v; std::memcpy(&v, p, 4); return v; }
+    case DType::kF32: { float v; std::memcpy(&v, p, 4); return v; }
+  }
+  return 0.0;
+}
+
+}  // namespace
+
+Result<std::vector<float>> coarse_histogram(const ChunkSource& source, uint32_t channel, uint32_t timepoint,
+                                            std::array<double, 2> range, size_t bins, uint32_t max_chunks) {
+  const std::vector<LevelInfo>& levels = source.levels();
+  if (levels.empty() || bins == 0 || !(range[1] > range[0])) return invalid_argument("histogram: nothing to count");
+  size_t level = levels.size() - 1;
+  for (size_t l = 0; l < levels.size(); ++l) {
+    const auto& c = levels[l].chunk_counts;
+    if (uint64_t(c[0]) * c[1] * c[2] <= max_chunks) {
+      level = l;
+      break;
+    }
+  }
+  const LevelInfo& info = levels[level];
+  const uint32_t size = source.chunk_size(), apron = source.apron();
+  std::vector<double> counts(bins, 0.0);
+  const double scale = double(bins) / (range[1] - range[0]);
+  for (uint32_t cz = 0; cz < info.chunk_counts[2]; ++cz)
+    for (uint32_t cy = 0; cy < info.chunk_counts[1]; ++cy)
+      for (uint32_t cx = 0; cx < info.chunk_counts[0]; ++cx) {
+        const ChunkKey key{uint32_t(level), cx, cy, cz, channel, timepoint};
+        VXR_ASSIGN_OR_RETURN(std::shared_ptr<const Chunk> chunk, source.read(key));
+        const uint32_t bytes = dtype_bytes(chunk->dtype), edge = chunk->edge;
+        // Interior voxels inside the level (edge chunks repeat their last voxel past it).
+        const uint64_t n[3] = {std::min<uint64_t>(size, info.dims[0] - uint64_t(cx) * size),
+                               std::min<uint64_t>(size, info.dims[1] - uint64_t(cy) * size),
+                               std::min<uint64_t>(size, info.dims[2] - uint64_t(cz) * size)};
+        for (uint64_t z = 0; z < n[2]; ++z)
+          for (uint64_t y = 0; y < n[1]; ++y)
+            for (uint64_t x = 0; x < n[0]; ++x) {
+              const size_t at = ((z + apron) * edge + (y + apron)) * edge + (x + apron);
+              const double v = voxel_value(&chunk->data[at * bytes], chunk->dtype);
+              if (!std::isfinite(v)) continue;
+              const double b = std::floor((v - range[0]) * scale);
+              counts[size_t(std::clamp(b, 0.0, double(bins - 1)))] += 1.0;
+            }
+      }
+  std::vector<float> out(bins);
+  for (size_t i = 0; i < bins; ++i) out[i] = float(std::log1p(counts[i]));
+  return out;
+}
+
+}  // namespace vxr::xr

@@ -1,0 +1,45 @@
+// What the desktop window needs to be the viewer (panels, keys and mouse
+// editing a ViewerState that says what the renderer draws), built once by
+// `vxr view` and shared by every (re)start of the window.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "annotate/annotation_store.h"
+#include "render/camera.h"
+#include "scene/render_settings.h"
+#include "volume/chunk_source.h"
+#include "xr/desktop/ui_script.h"
+#include "xr/volume_transform.h"
+
+namespace vxr::xr {
+
+struct ViewerSetup {
+  std::string dataset;  // window title and the panels
+  Scene scene;          // volume (input path) and the starting settings
+  uint32_t timepoints = 1;
+  std::array<double, 2> data_range{0.0, 255.0};
+  VolumePlacement placement;  // the orbit's scale (longest side = 1 orbit unit) and the marker overlay
+  VolumeTransform transform;  // where the frame loop places the volume (its initial transform)
+  std::optional<UiScript> script;                    // checked; run, then the window closes
+  std::shared_ptr<annotate::AnnotationStore> store;  // tools, cards, the marker overlay (may be null)
+  std::vector<std::vector<float>> histograms;        // per channel, bins over data_range (panels)
+};
+
+// Histogram of `channel` at `timepoint` over `range` in `bins` bins, from the
+// finest level of at most `max_chunks` chunks (a coarse level: the data's
+// shape, read at once), as log(1 + count) so the background does not flatten
+// the rest. Interior voxels only.
+Result<std::vector<float>> coarse_histogram(const ChunkSource& source, uint32_t channel, uint32_t timepoint,
+                                            std::array<double, 2> range, size_t bins = 128,
+                                            uint32_t max_chunks = 64);
+
+// The orbit camera of `state` as the renderer's camera in the volume's frame
+// (world units): the orbit is in units of the volume's longest side.
+CameraState viewer_world_camera(const ViewerState& state, const VolumePlacement& placement);
+
+}  // namespace vxr::xr
