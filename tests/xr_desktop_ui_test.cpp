@@ -309,7 +309,7 @@ TEST_CASE("desktop viewer: playback of the 7-timepoint OME-TIFF shows the timepo
   nlohmann::json steps = nlohmann::json::array({"wait 2", "ui off"});
   // What each timepoint looks like, paused.
   for (int t = 0; t < 7; ++t)
-    for (const std::string s : {"time " + std::to_string(t), std::string("wait 3"), "screenshot " + shot("ref" + std::to_string(t))})
+    for (const std::string& s : {"time " + std::to_string(t), std::string("wait 3"), "screenshot " + shot("ref" + std::to_string(t))})
       steps.push_back(s);
   steps.push_back("time 0");
   steps.push_back("wait 2");
@@ -321,7 +321,7 @@ TEST_CASE("desktop viewer: playback of the 7-timepoint OME-TIFF shows the timepo
     steps.push_back("screenshot " + shot("play" + std::to_string(i)));
     steps.push_back("wait 2");
   }
-  for (const std::string s : {std::string("pause"), "screenshot " + shot("paused0"), std::string("wait 3"),
+  for (const std::string& s : {std::string("pause"), "screenshot " + shot("paused0"), std::string("wait 3"),
                               "screenshot " + shot("paused1")})
     steps.push_back(s);
   const std::string script = dir + "/play.json";

@@ -225,7 +225,7 @@ Status DesktopTarget::create_eyes() {
                          gpu::create_image(*ctx_, {VK_IMAGE_TYPE_2D, eye_format, {o_.width, o_.height, 1},
                                                    VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
                                                        VK_IMAGE_USAGE_SAMPLED_BIT |
-                                                       (srgb ? 0u : VK_IMAGE_USAGE_STORAGE_BIT),
+                                                       (srgb ? 0u : uint32_t(VK_IMAGE_USAGE_STORAGE_BIT)),
                                                    "desktop eye"}));
     VXR_RETURN_IF_ERROR(ctx_->submit_and_wait([&](VkCommandBuffer cmd) {
       image_barrier(cmd, img.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
