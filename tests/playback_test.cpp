@@ -342,3 +342,28 @@ TEST_CASE("play headless: an OME-TIFF time series plays without import, every ti
   for (size_t i = 1; i < shown.size(); ++i) CHECK(shown[i] > shown[i - 1]);
   CHECK(doc["dropped"].get<uint64_t>() + shown.size() == 7);
 }
+
+TEST_CASE("view --timepoint: the viewer opens at that timepoint, the same picture every run, a clear error past the last") {
+  namespace fs = std::filesystem;
+  const fs::path dir = vxr::test::scratch_dir("playback", "view_timepoint");
+  const auto q = [](const fs::path& p) { return vxr::test::shell_quote(p.string()); };
+  const auto made = vxr::test::run_vxr("bench movie --dims 48 40 36 --timepoints 6 --loops 1 --size 32 --fps 1000 --out " +
+                                           q(dir),
+                                       dir, 300);
+  REQUIRE_MESSAGE(made.rc == 0, made.err);
+  const fs::path movie = dir / "movie.vxc";
+  const auto view = [&](uint32_t t, const std::string& name) {
+    const auto r = vxr::test::run_vxr("view " + q(movie) + " --headless --frames 20 --width 64 --height 64 --timepoint " +
+                                          std::to_string(t) + " --png-dir " + q(dir / name),
+                                      dir, 300);
+    REQUIRE_MESSAGE(r.rc == 0, r.err);
+    return vxr::test::read_bytes(dir / name / "last_left.png");
+  };
+  const std::string t0 = view(0, "t0"), t4 = view(4, "t4"), t4_again = view(4, "t4_again");
+  CHECK(t0 != t4);  // the movie's blobs move between timepoints
+  CHECK(t4 == t4_again);
+
+  const auto past = vxr::test::run_vxr("view " + q(movie) + " --headless --frames 1 --timepoint 6", dir, 300);
+  CHECK(past.rc == 2);
+  CHECK(past.err.find("--timepoint: 6, but " + movie.string() + " has 6 timepoint(s) (0..5)") != std::string::npos);
+}

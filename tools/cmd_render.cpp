@@ -176,11 +176,8 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   const VolumeInfo& info = src->info();
   auto drawn = parse_channels(o.channel, info.channels);
   if (!drawn) return fail(drawn.status(), kExitUsage);
-  if (o.timepoint >= info.timepoints)
-    return fail(invalid_argument("--timepoint: " + std::to_string(o.timepoint) + ", but " + o.input + " has " +
-                                 std::to_string(info.timepoints) + " timepoint(s) (0.." +
-                                 std::to_string(info.timepoints - 1) + ")"),
-                kExitUsage);
+  if (Status st = check_timepoint(o.input, o.timepoint, info.timepoints); !st)
+    return fail(st, kExitUsage);
   if (info.channels > VXR_MAX_CHANNELS && o.channel.empty())
     std::fprintf(stderr, "vxr: note: %s has %u channels; drawing 0..%d (choose with --channel)\n", o.input.c_str(),
                  info.channels, VXR_MAX_CHANNELS - 1);

@@ -32,6 +32,7 @@ struct Options {
   bool sample = false;
   bool force_xr = false, force_desktop = false, force_headless = false;
   uint64_t frames = 0;
+  uint32_t timepoint = 0;  // shown first (the desktop viewer then plays or steps from it)
   std::string script;
   std::string png_dir;
   bool png_every_frame = false;
@@ -49,6 +50,7 @@ struct Options {
   SessionFlags flags;
   std::string card;  // STORE:ID or ID
   bool lod_bias_given = false;
+  bool timepoint_given = false;
 };
 
 // The value range the window/level sliders span: the dtype's, or around the
@@ -88,7 +90,7 @@ Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, co
                             ? o.input
                             : std::filesystem::absolute(o.input, ec).string();
   setup->scene.render = card ? card->render : session.settings;  // a card's settings and timepoint, as --card shows
-  if (card) setup->scene.timepoint = card->timepoint;
+  setup->scene.timepoint = card ? card->timepoint : o.timepoint;
   setup->timepoints = info.timepoints;
   setup->data_range = slider_range(info, session.settings);
   setup->placement = placement;
@@ -133,6 +135,7 @@ int run(const Options& given) {
                                    "(vxr render --card takes them as overrides)"),
                   kExitUsage);
     if (!o.movie.empty()) return fail(invalid_argument("--card and --movie: give one"), kExitUsage);
+    if (o.timepoint_given) return fail(invalid_argument("--card restores the card's timepoint; drop --timepoint"), kExitUsage);
     auto sc = load_card_scene(o.card, o.flags.annotations, o.input);
     if (!sc) {
       const ErrorCode c = sc.status().code();
@@ -175,9 +178,11 @@ int run(const Options& given) {
   }
   for (const std::string& n : session->notes)
     std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
+  if (Status st = check_timepoint(o.input, o.timepoint, session->source->info().timepoints); !st)
+    return fail(st, kExitUsage);
   if (const VolumeInfo& info = session->source->info(); !card && (info.channels > 1 || info.timepoints > 1))
-    std::fprintf(stderr, "vxr view: %s: showing channel 0 of timepoint 0 (of %u channels, %u timepoints)\n",
-                 o.input.c_str(), unsigned(info.channels), unsigned(info.timepoints));
+    std::fprintf(stderr, "vxr view: %s: showing channel 0 of timepoint %u (of %u channels, %u timepoints)\n",
+                 o.input.c_str(), unsigned(o.timepoint), unsigned(info.channels), unsigned(info.timepoints));
   xr::TargetRequest req;
   req.kind = o.force_xr        ? xr::TargetKind::kOpenXr
              : o.force_desktop ? xr::TargetKind::kDesktop
@@ -259,7 +264,7 @@ int run(const Options& given) {
   if (card) vo.channels = card->channels;
   vo.warp.enabled = o.lens_warp;
   vo.frame.lod.lod_bias = o.lod_bias;
-  vo.frame.lod.timepoint = card ? card->timepoint : 0;
+  vo.frame.lod.timepoint = card ? card->timepoint : o.timepoint;
   vo.frame_budget_ms = o.frame_budget_ms;
   // The desktop viewer holds the store open itself (its tools edit it) and draws its markers over the volume.
   const bool viewer_has_store = req.viewer && req.viewer->store;
@@ -305,6 +310,7 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   auto* fh = cmd->add_flag("--headless", o->force_headless, "render without a display");
   fx->excludes(fd, fh);
   fd->excludes(fh);
+  cmd->add_option("--timepoint", o->timepoint, "timepoint to show (default 0; the desktop viewer plays from it)");
   cmd->add_option("--frames", o->frames, "render N frames, then exit cleanly (0: until closed)")
       ->check(CLI::Range(uint64_t(0), uint64_t(10000000)));
   cmd->add_option("--script", o->script, "headless: pose script (JSON; see xr/script.h)");
@@ -339,6 +345,7 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--step", o->flags.step, "samples every STEP voxels (default 0.5)");
   cmd->callback([&inv, o, cmd] {
     o->lod_bias_given = cmd->count("--lod-bias") > 0;
+    o->timepoint_given = cmd->count("--timepoint") > 0;
     inv.run = [o] { return run(*o); };
   });
 }

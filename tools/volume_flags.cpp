@@ -11,4 +11,10 @@ void add_volume_flags(CLI::App* cmd, SessionFlags* f) {
                   "D: opacity per D world units (physical voxel size, as VTK); 0: per voxel (default)");
 }
 
+Status check_timepoint(const std::string& input, uint32_t timepoint, uint32_t timepoints) {
+  if (timepoint < timepoints) return Status::ok();
+  return invalid_argument("--timepoint: " + std::to_string(timepoint) + ", but " + input + " has " +
+                          std::to_string(timepoints) + " timepoint(s) (0.." + std::to_string(timepoints - 1) + ")");
+}
+
 }  // namespace vxr::cli

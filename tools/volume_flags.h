@@ -11,4 +11,7 @@ namespace vxr::cli {
 // --voxel-size X,Y,Z, --opacity LO:A,HI:B, --opacity-unit-distance D into `f`.
 void add_volume_flags(CLI::App* cmd, SessionFlags* f);
 
+// --timepoint T against the input's count: kInvalidArgument naming both.
+Status check_timepoint(const std::string& input, uint32_t timepoint, uint32_t timepoints);
+
 }  // namespace vxr::cli
