@@ -51,23 +51,20 @@ namespace vxr::cli {
 namespace {
 
 struct Options {
-  std::string input, output, settings_path, camera, size = "512x512", model, colormap, window, path = "compute";
-  std::string renderer;  // "" = lod for chunk sources (.vxc, OME-Zarr) and procedural: inputs, dense otherwise
-  std::string channel;   // "" = the first (up to 4) channels; else a comma list of channel indices
-  uint32_t timepoint = 0;
-  double fov = 0.0, step = 0.0, reference_step = 1.0 / 16.0;
+  std::string input, output, camera, size = "512x512", path = "compute";
+  std::string renderer;  // "" = lod, unless a dense-only choice (--reference, --path fragment) asks for dense
+  double fov = 0.0, reference_step = 1.0 / 16.0;
   double lod_bias = 0.0, frame_budget_ms = 0.0;
   bool lod_bias_given = false;
   int frames = 0;  // 0: until converged (lod) / one frame (dense)
   bool reference = false, stats = false;
   bool no_skip = false;  // lod: no empty-space skipping (bricks or cells), for A/B timing
   bool json = false;     // lod: per-frame figures as JSON on stdout
-  bool size_given = false, timepoint_given = false, path_given = false;
-  std::string annotations;  // --annotations STORE (a project input picks its own)
+  bool size_given = false, path_given = false;
   std::string card;       // STORE:ID to restore
   std::string save_card;  // STORE to add a card to
   std::string card_title, card_note;
-  SessionFlags volume_flags;  // --voxel-size, --opacity, --opacity-unit-distance (shared with vxr view)
+  SessionFlags flags;  // the session's flags, shared with vxr view (--settings, --channel, --annotations, ...)
 };
 
 // What the render resolved, for --save-card.
@@ -93,62 +90,6 @@ bool parse_doubles(const std::string& text, size_t n, std::vector<double>& out) 
   return out.size() == n;
 }
 
-// --channel "2" or "0,2": the volume's channels to draw (at most 4, each once).
-Result<std::vector<uint32_t>> parse_channels(const std::string& text, uint32_t volume_channels) {
-  std::vector<uint32_t> out;
-  if (text.empty()) {
-    for (uint32_t c = 0; c < std::min<uint32_t>(volume_channels, VXR_MAX_CHANNELS); ++c) out.push_back(c);
-    return out;
-  }
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    char* end = nullptr;
-    const unsigned long c = std::strtoul(item.c_str(), &end, 10);
-    if (item.empty() || *end != '\0' || c >= volume_channels)
-      return invalid_argument("--channel: '" + item + "' is not a channel of this volume (0.." +
-                              std::to_string(volume_channels - 1) + ")");
-    if (std::find(out.begin(), out.end(), uint32_t(c)) != out.end())
-      return invalid_argument("--channel: channel " + item + " is named twice");
-    out.push_back(uint32_t(c));
-  }
-  if (out.size() > VXR_MAX_CHANNELS)
-    return invalid_argument("--channel: at most " + std::to_string(VXR_MAX_CHANNELS) + " channels are drawn together");
-  return out;
-}
-
-// Channels without settings get their own: single-hue colours (a copy of
-// channel 0's settings otherwise, window included); windows from
-// `auto_window_of(c)` unless --window/--settings gave one. The same rule for
-// both renderers.
-void complete_channel_settings(RenderSettings& s, size_t n, bool window_given, bool colormap_given,
-                               const std::function<std::pair<double, double>(size_t)>& auto_window_of) {
-  const char* hues[4] = {"green", "magenta", "cyan", "yellow"};
-  for (size_t c = s.channels.size(); c < n; ++c) {
-    ChannelSettings ch = s.channels[0];
-    ch.colormap = n > 1 ? hues[c] : ch.colormap;
-    ch.color_points.clear();
-    s.channels.push_back(ch);
-  }
-  if (s.channels.size() > n) s.channels.resize(n);
-  if (n > 1 && !colormap_given && s.channels[0].colormap == "gray") s.channels[0].colormap = hues[0];
-  for (size_t c = 0; c < n && !window_given; ++c) {
-    auto [lo, hi] = auto_window_of(c);
-    s.channels[c].window_lo = lo;
-    s.channels[c].window_hi = hi;
-  }
-  if (s.iso_value == RenderSettings{}.iso_value && !window_given)
-    s.iso_value = 0.5 * (s.channels[0].window_lo + s.channels[0].window_hi);
-}
-
-Result<std::string> read_text(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) return not_found(path + ": cannot open the settings file");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 
 // The one renderer, for every input: open_volume_session's source (a .vxc
@@ -158,41 +99,22 @@ using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 // (every wanted brick resident) and writes that frame; with it, it
 // renders --frames frames (default 30) letting the frame-budget controller set
 // the LOD bias, and writes the last.
-int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context& gpu, bool procedural, uint32_t width,
-            uint32_t height, const CameraMaker& make_camera, Resolved* resolved) {
-  SessionFlags flags;
-  flags.annotations = o.annotations;
-  auto session = open_volume_session(o.input, flags);
-  if (!session) return fail(session.status(), procedural ? kExitUsage : kExitFailure);
-  for (const std::string& n : session->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
-  std::shared_ptr<const ChunkSource> src = session->source;
-  if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); vs.is_ok() && vs->has_value())
-    src = with_voxel_size(src, **vs);
-  if (procedural && !window_given) {  // `vxr bench lod`'s: above the background noise (0..6)
-    s.channels[0].window_lo = 8;
-    s.channels[0].window_hi = 200;
-    window_given = true;
+int run_lod(const Options& o, gpu::Context& gpu, uint32_t width, uint32_t height, const CameraMaker& make_camera,
+            Resolved* resolved) {
+  SessionStep failed_at = SessionStep::kSettings;
+  auto session = open_volume_session(o.input, o.flags, &failed_at);
+  if (!session) {
+    // The flags, channels and timepoint are usage errors; so is a bad procedural spec. A file that fails to read is not.
+    const bool usage = failed_at == SessionStep::kSource ? starts_with(o.input, "procedural:")
+                                                         : session.status().code() == ErrorCode::kInvalidArgument;
+    return fail(session.status(), usage ? kExitUsage : kExitFailure);
   }
+  for (const std::string& n : session->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
+  const std::shared_ptr<const ChunkSource> src = session->source;
+  const RenderSettings& s = session->settings;
+  const std::vector<uint32_t>* drawn = &session->channels;
+  const uint32_t timepoint = session->timepoint;
   const VolumeInfo& info = src->info();
-  auto drawn = parse_channels(o.channel, info.channels);
-  if (!drawn) return fail(drawn.status(), kExitUsage);
-  if (Status st = check_timepoint(o.input, o.timepoint, info.timepoints); !st)
-    return fail(st, kExitUsage);
-  if (info.channels > VXR_MAX_CHANNELS && o.channel.empty())
-    std::fprintf(stderr, "vxr: note: %s has %u channels; drawing 0..%d (choose with --channel)\n", o.input.c_str(),
-                 info.channels, VXR_MAX_CHANNELS - 1);
-  // Percentiles of a level small enough to read whole (~2 M voxels).
-  const uint32_t window_level = finest_level_that_fits(*src, 4096, uint64_t(2) << 20);
-  Status window_error = Status::ok();
-  complete_channel_settings(s, drawn->size(), window_given, !o.colormap.empty(), [&](size_t c) {
-    auto dense = read_level_dense(*src, window_level, (*drawn)[c], o.timepoint, uint64_t(64) << 20);
-    if (!dense) {
-      window_error = dense.status();
-      return std::pair<double, double>(0.0, 1.0);
-    }
-    return percentile_window(*dense);
-  });
-  if (!window_error) return fail(window_error);
   if (Status st = check_brick_settings(s, static_cast<uint32_t>(drawn->size())); !st) return fail(st, kExitUsage);
 
   BrickRendererOptions ro;
@@ -210,7 +132,7 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   AnnotationScene annotations;
   BrickRenderer::UnderlayRecorder underlay;
   if (!session->annotation_store.empty()) {
-    auto loaded = load_annotation_scene(session->annotation_store, placement, o.timepoint);
+    auto loaded = load_annotation_scene(session->annotation_store, placement, timepoint);
     if (!loaded) return fail(loaded.status());
     annotations = std::move(loaded).value();
     auto ar = AnnotationRenderer::create(gpu);
@@ -221,7 +143,7 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
 
   BrickFrameSettings frame;
   frame.lod.lod_bias = o.lod_bias;
-  frame.lod.timepoint = o.timepoint;
+  frame.lod.timepoint = timepoint;
   const bool budget = o.frame_budget_ms > 0.0;
   FrameBudget controller;
   controller.target_ms = o.frame_budget_ms;
@@ -234,7 +156,7 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
   if (o.json && o.reference) {
     std::vector<DenseVolume> level0;
     for (uint32_t c : *drawn) {
-      auto dense = read_level_dense(*src, 0, c, o.timepoint, uint64_t(1) << 30);
+      auto dense = read_level_dense(*src, 0, c, timepoint, uint64_t(1) << 30);
       if (!dense) return fail(dense.status());
       level0.push_back(std::move(dense).value());
     }
@@ -330,7 +252,7 @@ int run_lod(const Options& o, RenderSettings s, bool window_given, gpu::Context&
 int save_card(const Options& o, Scene sc, const Resolved& r, uint32_t width, uint32_t height) {
   std::error_code ec;
   sc.volume = starts_with(o.input, "procedural:") ? o.input : std::filesystem::absolute(o.input, ec).lexically_normal().string();
-  sc.timepoint = o.timepoint;
+  sc.timepoint = o.flags.timepoint;
   sc.channels = r.channels;
   sc.has_camera = true;
   sc.camera = {{r.camera.eye.x, r.camera.eye.y, r.camera.eye.z},
@@ -341,9 +263,9 @@ int save_card(const Options& o, Scene sc, const Resolved& r, uint32_t width, uin
   sc.renderer = r.renderer;
   sc.path = r.renderer == "dense" ? o.path : "";
   sc.lod_bias = r.renderer == "lod" ? o.lod_bias : 0.0;
-  if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); vs.is_ok() && vs->has_value()) sc.voxel_size = **vs;
+  if (auto vs = parse_voxel_size_flag(o.flags.voxel_size); vs.is_ok() && vs->has_value()) sc.voxel_size = **vs;
   sc.render = r.settings;
-  sc.annotations = o.annotations.empty() ? "" : std::filesystem::absolute(o.annotations, ec).lexically_normal().string();
+  sc.annotations = o.flags.annotations.empty() ? "" : std::filesystem::absolute(o.flags.annotations, ec).lexically_normal().string();
   auto png = annotate::read_whole_file(o.output);
   if (!png) return fail(png.status());
   annotate::Card card;
@@ -363,33 +285,25 @@ int run(const Options& given) {
   VXR_TRACE_SCOPE("render");
   Options o = given;
   // A card (or a Scene given with --settings) supplies the choices the flags
-  // did not make; a flag given on the command line wins.
+  // did not make; a flag given on the command line wins. The session's own
+  // (channels, timepoint, voxel size, annotations) are complete_session_flags'.
   Scene scene;
-  bool window_given = false;
   auto adopt_scene_choices = [&](const Scene& sc) {
-    if (o.input.empty()) o.input = sc.volume;
-    if (!o.timepoint_given) o.timepoint = sc.timepoint;
-    if (o.channel.empty() && !sc.channels.empty()) {
-      for (size_t i = 0; i < sc.channels.size(); ++i) o.channel += (i ? "," : "") + std::to_string(sc.channels[i]);
-    }
     if (!o.size_given && sc.viewport[0] > 0)
       o.size = std::to_string(sc.viewport[0]) + "x" + std::to_string(sc.viewport[1]);
-    if (o.volume_flags.voxel_size.empty() && sc.voxel_size[0] > 0.0) o.volume_flags.voxel_size = voxel_size_text(sc.voxel_size);
     if (o.renderer.empty()) o.renderer = sc.renderer;
     if (!o.path_given && !sc.path.empty()) o.path = sc.path;
     if (!o.lod_bias_given && sc.lod_bias != 0.0) o.lod_bias = sc.lod_bias, o.lod_bias_given = true;
-    if (o.annotations.empty()) o.annotations = sc.annotations;
   };
   if (!o.card.empty()) {
-    if (!o.settings_path.empty()) return fail(invalid_argument("give --card or --settings, not both"), kExitUsage);
-    auto sc = load_card_scene(o.card, o.annotations, o.input);
+    if (!o.flags.settings.empty()) return fail(invalid_argument("give --card or --settings, not both"), kExitUsage);
+    auto sc = load_card_scene(o.card, o.flags.annotations, o.input);
     if (!sc) {
       const ErrorCode c = sc.status().code();
       return fail(sc.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage : kExitFailure);
     }
-    scene = *sc;
-    window_given = true;  // a card holds resolved windows
-    adopt_scene_choices(scene);
+    if (o.input.empty()) o.input = sc->volume;
+    o.flags.start = SettingsStart{*sc, /*is_scene=*/true, /*has_window=*/true};  // a card holds resolved windows
   }
   if (o.input.empty())
     return fail(invalid_argument("give the volume to render (vxr render INPUT -o out.png), or --card STORE:ID"), kExitUsage);
@@ -400,57 +314,26 @@ int run(const Options& given) {
   if (!starts_with(o.input, "procedural:")) {
     if (Status st = check_input(o.input, /*allow_dir=*/true); !st) return fail(st);
   }
-  if (Status st = check_output(o.output, {{o.input, o.settings_path}}, "-o"); !st) return fail(st, kExitUsage);
-  if (!o.settings_path.empty()) {
-    if (Status st = check_input(o.settings_path); !st) return fail(st, kExitUsage);
+  if (Status st = check_output(o.output, {{o.input, o.flags.settings}}, "-o"); !st) return fail(st, kExitUsage);
+  if (!o.flags.settings.empty()) {
+    if (Status st = check_input(o.flags.settings); !st) return fail(st, kExitUsage);
   }
   // Settings first: a bad setting is a usage error even before any file is read.
-  if (!o.settings_path.empty()) {
-    auto text = read_text(o.settings_path);
-    if (!text) return fail(text.status(), kExitUsage);
-    // A Scene has a render, camera or volume section; plain RenderSettings have none.
-    const bool is_scene = text->find("\"render\"") != std::string::npos || text->find("\"camera\"") != std::string::npos ||
-                          text->find("\"volume\"") != std::string::npos;
-    if (is_scene) {
-      auto sc = scene_from_json(*text);
-      if (!sc) return fail(invalid_argument(o.settings_path + ": " + sc.status().message()), kExitUsage);
-      scene = *sc;
-      adopt_scene_choices(scene);
-    } else {
-      auto rs = render_settings_from_json(*text);
-      if (!rs) return fail(invalid_argument(o.settings_path + ": " + rs.status().message()), kExitUsage);
-      scene.render = *rs;
-    }
-    window_given = text->find("\"window\"") != std::string::npos;
+  auto completed = complete_session_flags(o.flags);
+  if (!completed) return fail(completed.status(), kExitUsage);
+  o.flags = std::move(completed).value();
+  if (o.flags.start) {
+    scene = o.flags.start->scene;
+    if (o.flags.start->is_scene) adopt_scene_choices(scene);
   }
-  RenderSettings& s = scene.render;
-  if (!o.model.empty() && !optical_model_from_name(o.model, &s.model))
-    return fail(invalid_argument("--model: unknown optical model '" + o.model +
-                                 "' (use ea, emission, mip, minip, average or iso)"),
-                kExitUsage);
-  if (!o.colormap.empty()) s.channels[0].colormap = o.colormap;
-  if (!o.window.empty()) {
-    std::vector<double> w;
-    if (!parse_doubles(o.window, 2, w)) return fail(invalid_argument("--window: expected lo,hi, got '" + o.window + "'"), kExitUsage);
-    if (!(w[1] > w[0]))
-      return fail(invalid_argument("--window: lo " + o.window.substr(0, o.window.find(',')) + " must be below hi"), kExitUsage);
-    s.channels[0].window_lo = w[0];
-    s.channels[0].window_hi = w[1];
-    window_given = true;
-  }
-  if (o.step != 0.0) s.step_voxels = o.step;
-  if (!(s.step_voxels > 0.0)) return fail(invalid_argument("--step: must be > 0 voxels"), kExitUsage);
-  if (Status st = apply_opacity_flags(o.volume_flags, s); !st) return fail(st, kExitUsage);
-  if (auto vs = parse_voxel_size_flag(o.volume_flags.voxel_size); !vs) return fail(vs.status(), kExitUsage);
+  auto choice = choose_settings(o.flags);
+  if (!choice) return fail(choice.status(), kExitUsage);
   uint32_t width = 0, height = 0;
   if (std::sscanf(o.size.c_str(), "%ux%u", &width, &height) != 2 || width == 0 || height == 0 || width > 16384 ||
       height > 16384)
     return fail(invalid_argument("--size: expected WxH like 512x512, got '" + o.size + "'"), kExitUsage);
   if (o.path != "compute" && o.path != "fragment")
     return fail(invalid_argument("--path: use compute or fragment, not '" + o.path + "'"), kExitUsage);
-  // Settings that do not depend on the data (colormap names, windows, steps).
-  if (Status st = validate_render_settings(s, static_cast<uint32_t>(std::max<size_t>(1, s.channels.size()))); !st)
-    return fail(st, kExitUsage);
 
   // Which renderer: the out-of-core brick renderer (vxr view's) for every
   // input; the dense one only when asked for (--renderer dense, the fragment
@@ -463,7 +346,7 @@ int run(const Options& given) {
   if (renderer == "lod" && o.path_given && o.path == "fragment")
     return fail(invalid_argument("--path fragment: the dense renderer's fragment path; add --renderer dense"),
                 kExitUsage);
-  if (renderer == "dense" && !o.annotations.empty())
+  if (renderer == "dense" && !o.flags.annotations.empty())
     return fail(invalid_argument("--annotations: drawn by the out-of-core renderer; drop --renderer dense"), kExitUsage);
   if (renderer == "dense" && procedural)
     return fail(invalid_argument("--renderer dense: a procedural source is drawn only by --renderer lod"), kExitUsage);
@@ -485,7 +368,7 @@ int run(const Options& given) {
   // The reference marches every sample in double on the CPU: below 1/256 voxel it would run for days.
   if (o.reference && !(o.reference_step >= 1.0 / 256 && o.reference_step <= 64.0))
     return fail(invalid_argument("--reference-step: must be within 1/256..64 voxels (default 1/16)"), kExitUsage);
-  if (renderer == "dense" && o.timepoint != 0)
+  if (renderer == "dense" && o.flags.timepoint != 0)
     return fail(invalid_argument("--timepoint: the dense renderer loads timepoint 0 only; draw other timepoints "
                                  "out of core (a .vxc from `vxr import`, or OME-Zarr; --renderer lod)"),
                 kExitUsage);
@@ -550,32 +433,28 @@ int run(const Options& given) {
     return save_card(o, scene, resolved, width, height);
   };
 
-  if (renderer == "lod") return finish(run_lod(o, s, window_given, *gpu, procedural, width, height, make_camera, &resolved));
+  if (renderer == "lod") return finish(run_lod(o, *gpu, width, height, make_camera, &resolved));
 
   auto loaded = load_for_render(o.input, max_dim, uint64_t(1) << 30);
   if (!loaded) return fail(loaded.status());
   for (const auto& note : loaded->notes) std::fprintf(stderr, "vxr: note: %s\n", note.c_str());
   std::vector<DenseVolume>& channels = loaded->channels;
-  if (Status st = apply_voxel_size_flag(o.volume_flags, loaded->shrink, channels); !st) return fail(st, kExitUsage);
-  std::vector<uint32_t> drawn_channels;
+  if (Status st = apply_voxel_size_flag(o.flags, loaded->shrink, channels); !st) return fail(st, kExitUsage);
+  // The same choices as the session's, with windows from the whole volume loaded.
+  auto drawn = resolve_drawn_settings(*choice, o.flags, o.input, static_cast<uint32_t>(channels.size()), 1,
+                                      [&](uint32_t c) -> Result<std::pair<double, double>> { return percentile_window(channels[c]); });
+  if (!drawn) return fail(drawn.status(), kExitUsage);
+  for (const std::string& n : drawn->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
   {
-    auto drawn = parse_channels(o.channel, static_cast<uint32_t>(channels.size()));
-    if (!drawn) return fail(drawn.status(), kExitUsage);
-    drawn_channels = *drawn;
-    if (!o.channel.empty()) {
-      std::vector<DenseVolume> picked;
-      for (uint32_t c : *drawn) picked.push_back(std::move(channels[c]));
-      channels = std::move(picked);
-    }
+    std::vector<DenseVolume> picked;
+    for (uint32_t c : drawn->channels) picked.push_back(std::move(channels[c]));
+    channels = std::move(picked);
   }
-  complete_channel_settings(s, channels.size(), window_given, !o.colormap.empty(),
-                            [&](size_t c) { return percentile_window(channels[c]); });
-  if (Status st = validate_render_settings(s, static_cast<uint32_t>(channels.size())); !st) return fail(st, kExitUsage);
-
+  const RenderSettings& s = drawn->settings;
   const VolumePlacement placement{channels[0].dims, channels[0].voxel_size};
   Camera camera;
   if (int rc = make_camera(placement, channels[0].dims[2] == 1, &camera); rc != kExitOk) return rc;
-  resolved = {"dense", drawn_channels, s, camera};
+  resolved = {"dense", drawn->channels, s, camera};
 
   const auto t0 = std::chrono::steady_clock::now();
   Result<ImageRgbaF> image = invalid_argument("unset");
@@ -610,17 +489,10 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   auto* cmd = app.add_subcommand("render", "render one picture of a volume (.vxc, OME-Zarr, TIFF, OME-TIFF, slices, .ims, raw+JSON, procedural:vessels:SIDE) to PNG");
   cmd->add_option("input", o->input, "the volume (optional with --card: the card's volume)");
   cmd->add_option("-o,--out", o->output, "output PNG")->required();
-  cmd->add_option("--settings", o->settings_path, "render settings JSON (RenderSettings, or a Scene with render+camera)");
   cmd->add_option("--camera", o->camera, "px,py,pz,tx,ty,tz,ux,uy,uz: eye, target, up in world units (volume centred at 0)");
   cmd->add_option("--fov", o->fov, "vertical field of view in degrees");
   cmd->add_option("--size", o->size, "WxH (default 512x512)");
-  cmd->add_option("--model", o->model, "ea | emission | mip | minip | average | iso");
-  cmd->add_option("--colormap", o->colormap, "gray, viridis, magma, inferno, plasma, turbo, hot, red, green, blue, cyan, magenta, yellow");
-  cmd->add_option("--window", o->window, "lo,hi in data units (default: 0.5..99.5 percentiles)");
-  cmd->add_option("--step", o->step, "sample step in voxels");
-  add_volume_flags(cmd, &o->volume_flags);
-  cmd->add_option("--channel", o->channel, "channels to draw, e.g. 2 or 0,2 (default: the first up to 4)");
-  cmd->add_option("--timepoint", o->timepoint, "timepoint to draw (default 0; out-of-core renderer)");
+  add_session_flags(cmd, &o->flags);
   cmd->add_option("--path", o->path, "dense renderer: compute (default) or fragment (implies --renderer dense)");
   cmd->add_option("--renderer", o->renderer,
                   "lod (the out-of-core brick renderer vxr view uses; the default for every input) or dense (whole volume, "
@@ -636,7 +508,7 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_flag("--json", o->json,
                 "lod: print per-frame GPU ms, wall ms and samples as JSON (with --reference: RMSE against the CPU "
                 "reference of the finest level, 8-bit units)");
-  add_annotations_option(cmd, o->annotations);
+  add_annotations_option(cmd, o->flags.annotations);
   cmd->add_option("--card", o->card,
                   "STORE:ID (or ID of the --annotations store): restore a card's scene (volume, camera, settings, size); "
                   "flags override");
@@ -646,7 +518,7 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->callback([&inv, o, cmd] {
     o->lod_bias_given = cmd->count("--lod-bias") > 0;
     o->size_given = cmd->count("--size") > 0;
-    o->timepoint_given = cmd->count("--timepoint") > 0;
+    note_session_flags(cmd, &o->flags);
     o->path_given = cmd->count("--path") > 0;
     inv.run = [o] { return run(*o); };
   });

@@ -32,7 +32,6 @@ struct Options {
   bool sample = false;
   bool force_xr = false, force_desktop = false, force_headless = false;
   uint64_t frames = 0;
-  uint32_t timepoint = 0;  // shown first (the desktop viewer then plays or steps from it)
   std::string script;
   std::string png_dir;
   bool png_every_frame = false;
@@ -47,10 +46,9 @@ struct Options {
   double fps = 30.0;
   bool no_ui = false;
   std::string ui_script;
-  SessionFlags flags;
-  std::string card;  // STORE:ID or ID
+  SessionFlags flags;  // shared with vxr render; its timepoint is shown first (the desktop viewer plays from it)
+  std::string card;    // STORE:ID or ID
   bool lod_bias_given = false;
-  bool timepoint_given = false;
 };
 
 // The value range the window/level sliders span: the dtype's, or around the
@@ -78,8 +76,7 @@ std::array<double, 2> slider_range(const VolumeInfo& info, const RenderSettings&
 // script checked against them, the annotation store (--annotations or the project's) for the tools.
 Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, const VolumeSession& session,
                                                             const xr::VolumeTransform& transform,
-                                                            const VolumePlacement& placement,
-                                                            const std::optional<Scene>& card) {
+                                                            const VolumePlacement& placement) {
   auto setup = std::make_shared<xr::ViewerSetup>();
   const VolumeInfo& info = session.source->info();
   setup->dataset = o.sample || o.input.empty() ? std::string("sample (MRI head)")
@@ -89,13 +86,13 @@ Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, co
   setup->scene.volume = o.sample || o.input.empty() || o.input.rfind("procedural:", 0) == 0
                             ? o.input
                             : std::filesystem::absolute(o.input, ec).string();
-  setup->scene.render = card ? card->render : session.settings;  // a card's settings and timepoint, as --card shows
-  setup->scene.timepoint = card ? card->timepoint : o.timepoint;
+  setup->scene.render = session.settings;  // a card's or --settings' with the flags applied
+  setup->scene.timepoint = session.timepoint;
   setup->timepoints = info.timepoints;
   setup->data_range = slider_range(info, session.settings);
   setup->placement = placement;
   setup->transform = transform;
-  for (uint32_t c = 0; c < std::max<size_t>(1, session.settings.channels.size()) && c < info.channels; ++c) {
+  for (uint32_t c : session.channels) {
     auto histogram = xr::coarse_histogram(*session.source, c, 0, setup->data_range);
     if (!histogram) return histogram.status();
     setup->histograms.push_back(std::move(histogram).value());
@@ -128,14 +125,16 @@ Result<std::string> movie_scratch_dir(const std::string& movie) {
 
 int run(const Options& given) {
   Options o = given;
-  std::optional<Scene> card;
+  std::optional<Scene> pose;  // a card's, or a --settings Scene's with a camera: the headless view's camera and size
   if (!o.card.empty()) {
-    if (!o.flags.colormap.empty() || !o.flags.window.empty() || !o.flags.model.empty() || o.flags.step != 0.0)
-      return fail(invalid_argument("--card restores the card's render settings; drop --colormap/--window/--model/--step "
-                                   "(vxr render --card takes them as overrides)"),
+    if (!o.flags.colormap.empty() || !o.flags.window.empty() || !o.flags.model.empty() || o.flags.step != 0.0 ||
+        !o.flags.channel.empty() || !o.flags.settings.empty())
+      return fail(invalid_argument("--card restores the card's render settings; drop --colormap/--window/--model/--step/"
+                                   "--channel/--settings (vxr render --card takes them as overrides)"),
                   kExitUsage);
     if (!o.movie.empty()) return fail(invalid_argument("--card and --movie: give one"), kExitUsage);
-    if (o.timepoint_given) return fail(invalid_argument("--card restores the card's timepoint; drop --timepoint"), kExitUsage);
+    if (o.flags.timepoint_given)
+      return fail(invalid_argument("--card restores the card's timepoint; drop --timepoint"), kExitUsage);
     auto sc = load_card_scene(o.card, o.flags.annotations, o.input);
     if (!sc) {
       const ErrorCode c = sc.status().code();
@@ -147,7 +146,16 @@ int run(const Options& given) {
     if (sc->renderer == "dense")
       std::fprintf(stderr, "vxr view: note: card %s was drawn by the dense renderer; the view draws it out of core\n",
                    o.card.c_str());
-    card = *sc;
+    pose = *sc;
+    o.flags.start = SettingsStart{*sc, /*is_scene=*/true, /*has_window=*/true};  // a card holds resolved windows
+  }
+  if (!o.flags.settings.empty()) {
+    if (Status st = check_input(o.flags.settings); !st) return fail(st, kExitUsage);
+    auto completed = complete_session_flags(o.flags);  // read once: its camera is the headless view's too
+    if (!completed) return fail(completed.status(), kExitUsage);
+    o.flags = std::move(completed).value();
+    if (o.flags.start && o.flags.start->is_scene && o.flags.start->scene.has_camera && o.movie.empty() && o.script.empty())
+      pose = o.flags.start->scene;
   }
   if (o.frame_budget_ms < 0.0) return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
   if (!o.json.empty()) {
@@ -178,11 +186,13 @@ int run(const Options& given) {
   }
   for (const std::string& n : session->notes)
     std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
-  if (Status st = check_timepoint(o.input, o.timepoint, session->source->info().timepoints); !st)
-    return fail(st, kExitUsage);
-  if (const VolumeInfo& info = session->source->info(); !card && (info.channels > 1 || info.timepoints > 1))
-    std::fprintf(stderr, "vxr view: %s: showing channel 0 of timepoint %u (of %u channels, %u timepoints)\n",
-                 o.input.c_str(), unsigned(o.timepoint), unsigned(info.channels), unsigned(info.timepoints));
+  if (const VolumeInfo& info = session->source->info(); info.channels > 1 || info.timepoints > 1) {
+    std::string shown;
+    for (uint32_t c : session->channels) shown += (shown.empty() ? "" : ",") + std::to_string(c);
+    std::fprintf(stderr, "vxr view: %s: showing channel(s) %s of timepoint %u (of %u channels, %u timepoints)\n",
+                 o.input.c_str(), shown.c_str(), unsigned(session->timepoint), unsigned(info.channels),
+                 unsigned(info.timepoints));
+  }
   xr::TargetRequest req;
   req.kind = o.force_xr        ? xr::TargetKind::kOpenXr
              : o.force_desktop ? xr::TargetKind::kDesktop
@@ -218,7 +228,7 @@ int run(const Options& given) {
                                   info.voxel_size};
   const xr::VolumeTransform start = xr::default_volume_transform(placement);
   if (!o.no_ui && o.movie.empty() && !o.force_xr && !o.force_headless) {
-    auto setup = viewer_setup(o, *session, start, placement, card);
+    auto setup = viewer_setup(o, *session, start, placement);
     if (!setup) {
       const ErrorCode c = setup.status().code();
       return fail(setup.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage
@@ -236,17 +246,13 @@ int run(const Options& given) {
     }
   }
 
-  if (card) {
-    if (card->timepoint >= info.timepoints)
-      return fail(invalid_argument("--card: timepoint " + std::to_string(card->timepoint) + ", but " + o.input +
-                                   " has " + std::to_string(info.timepoints)),
-                  kExitUsage);
-    // One view with the card's camera and size, as vxr render --card draws it
-    // (a headset or window keeps its own eye size).
+  if (pose) {
+    // One view with the card's (or --settings Scene's) camera and size, as
+    // vxr render draws it (a headset or window keeps its own eye size).
     req.headless.stereo = false;
-    if (!o.width && card->viewport[0] > 0) req.headless.script.width = card->viewport[0];
-    if (!o.height && card->viewport[1] > 0) req.headless.script.height = card->viewport[1];
-    req.headless.camera = scene_camera(*card, placement, info.dims[2] == 1);
+    if (!o.width && pose->viewport[0] > 0) req.headless.script.width = pose->viewport[0];
+    if (!o.height && pose->viewport[1] > 0) req.headless.script.height = pose->viewport[1];
+    req.headless.camera = scene_camera(*pose, placement, info.dims[2] == 1);
   }
 
   auto choice = xr::choose_target(req);
@@ -254,17 +260,17 @@ int run(const Options& given) {
   std::printf("vxr view: %s\n", choice->reason.c_str());
   std::fflush(stdout);
 
-  if (card && choice->kind != xr::TargetKind::kHeadless)
+  if (!o.card.empty() && choice->kind != xr::TargetKind::kHeadless)
     std::fprintf(stderr, "vxr view: note: --card: settings, channels, timepoint and annotations restored; the card's "
                          "camera is restored headless only (a headset or window keeps its own pose)\n");
 
   xr::ViewOptions vo;
   vo.frames = o.frames;
-  vo.settings = card ? card->render : session->settings;
-  if (card) vo.channels = card->channels;
+  vo.settings = session->settings;
+  vo.channels = session->channels;
   vo.warp.enabled = o.lens_warp;
   vo.frame.lod.lod_bias = o.lod_bias;
-  vo.frame.lod.timepoint = card ? card->timepoint : o.timepoint;
+  vo.frame.lod.timepoint = session->timepoint;
   vo.frame_budget_ms = o.frame_budget_ms;
   // The desktop viewer holds the store open itself (its tools edit it) and draws its markers over the volume.
   const bool viewer_has_store = req.viewer && req.viewer->store;
@@ -310,7 +316,6 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   auto* fh = cmd->add_flag("--headless", o->force_headless, "render without a display");
   fx->excludes(fd, fh);
   fd->excludes(fh);
-  cmd->add_option("--timepoint", o->timepoint, "timepoint to show (default 0; the desktop viewer plays from it)");
   cmd->add_option("--frames", o->frames, "render N frames, then exit cleanly (0: until closed)")
       ->check(CLI::Range(uint64_t(0), uint64_t(10000000)));
   cmd->add_option("--script", o->script, "headless: pose script (JSON; see xr/script.h)");
@@ -338,14 +343,10 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--card", o->card,
                   "STORE:ID (or ID of the --annotations store or the input project's): restore a card's volume, "
                   "settings, channels, timepoint and annotations; headless, its exact camera and size too");
-  cmd->add_option("--colormap", o->flags.colormap, "colormap name (default hot)");
-  cmd->add_option("--window", o->flags.window, "LO,HI data window (default: from the data)");
-  add_volume_flags(cmd, &o->flags);
-  cmd->add_option("--model", o->flags.model, "optical model: ea, emission or mip");
-  cmd->add_option("--step", o->flags.step, "samples every STEP voxels (default 0.5)");
+  add_session_flags(cmd, &o->flags);
   cmd->callback([&inv, o, cmd] {
     o->lod_bias_given = cmd->count("--lod-bias") > 0;
-    o->timepoint_given = cmd->count("--timepoint") > 0;
+    note_session_flags(cmd, &o->flags);
     inv.run = [o] { return run(*o); };
   });
 }

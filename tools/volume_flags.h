@@ -1,5 +1,5 @@
-// The flags vxr view and vxr render share for the volume's geometry and
-// opacity, registered in one place (parsed by engine/render/volume_session.h).
+// The flags vxr view and vxr render share for the session (what is drawn and
+// how), registered in one place; engine/render/volume_session.h parses them.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -8,10 +8,10 @@
 
 namespace vxr::cli {
 
-// --voxel-size X,Y,Z, --opacity LO:A,HI:B, --opacity-unit-distance D into `f`.
-void add_volume_flags(CLI::App* cmd, SessionFlags* f);
-
-// --timepoint T against the input's count: kInvalidArgument naming both.
-Status check_timepoint(const std::string& input, uint32_t timepoint, uint32_t timepoints);
+// --settings --model --colormap --window --step --channel --timepoint
+// --voxel-size --opacity --opacity-unit-distance into `f`. Call note_session_flags(cmd, f) in the
+// command's callback (it records which were given).
+void add_session_flags(CLI::App* cmd, SessionFlags* f);
+void note_session_flags(const CLI::App* cmd, SessionFlags* f);
 
 }  // namespace vxr::cli

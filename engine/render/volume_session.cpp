@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "annotate/project.h"
@@ -17,30 +18,35 @@ namespace vxr {
 namespace {
 
 
-// The window of a chunked source from a level small enough to read whole.
-Result<std::pair<double, double>> source_window(const ChunkSource& src) {
-  const uint32_t level = finest_level_that_fits(src, 4096, uint64_t(2) << 20);
-  VXR_ASSIGN_OR_RETURN(DenseVolume dense, read_level_dense(src, level, 0, 0, uint64_t(64) << 20));
-  return percentile_window(dense);
+// "X,Y" -> the two finite numbers, when that is the whole text.
+bool parse_pair(const std::string& text, double* first, double* second) {
+  const size_t comma = text.find(',');
+  if (comma == std::string::npos) return false;
+  char* end = nullptr;
+  const std::string a = text.substr(0, comma), b = text.substr(comma + 1);
+  *first = std::strtod(a.c_str(), &end);
+  if (a.empty() || *end != '\0' || !std::isfinite(*first)) return false;
+  *second = std::strtod(b.c_str(), &end);
+  return !b.empty() && *end == '\0' && std::isfinite(*second);
 }
 
-Status apply_flags(const SessionFlags& f, RenderSettings& s) {
-  if (!f.colormap.empty()) s.channels[0].colormap = f.colormap;
+// --model --colormap --window --step over the start's settings (channel 0's colour and window).
+Status apply_flags(const SessionFlags& f, SettingsChoice& c) {
+  RenderSettings& s = c.settings;
   if (!f.model.empty() && !optical_model_from_name(f.model, &s.model))
-    return invalid_argument("--model: unknown optical model '" + f.model + "'");
-  if (f.step != 0.0) {
-    if (!(f.step > 0.0) || !std::isfinite(f.step)) return invalid_argument("--step: must be > 0 voxels");
-    s.step_voxels = f.step;
-  }
+    return invalid_argument("--model: unknown optical model '" + f.model +
+                            "' (use ea, emission, mip, minip, average or iso)");
+  if (!f.colormap.empty()) s.channels[0].colormap = f.colormap, c.colormap_given = true;
   if (!f.window.empty()) {
-    std::stringstream ss(f.window);
     double lo = 0, hi = 0;
-    char comma = 0;
-    if (!(ss >> lo >> comma >> hi) || comma != ',' || !ss.eof() || !(hi > lo))
-      return invalid_argument("--window: '" + f.window + "' is not LO,HI with LO < HI (data units)");
+    if (!parse_pair(f.window, &lo, &hi)) return invalid_argument("--window: expected lo,hi, got '" + f.window + "'");
+    if (!(hi > lo)) return invalid_argument("--window: lo " + f.window.substr(0, f.window.find(',')) + " must be below hi");
     s.channels[0].window_lo = lo;
     s.channels[0].window_hi = hi;
+    c.window_given = true;
   }
+  if (f.step != 0.0) s.step_voxels = f.step;
+  if (!(s.step_voxels > 0.0) || !std::isfinite(s.step_voxels)) return invalid_argument("--step: must be > 0 voxels");
   return Status::ok();
 }
 
@@ -149,6 +155,127 @@ Status apply_voxel_size_flag(const SessionFlags& f, uint32_t shrink, std::vector
   return Status::ok();
 }
 
+Result<SettingsStart> read_settings_file(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return not_found(path + ": cannot open the settings file");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string text = ss.str();
+  SettingsStart start;
+  // A Scene has a render, camera or volume section; plain RenderSettings have none.
+  start.is_scene = text.find("\"render\"") != std::string::npos || text.find("\"camera\"") != std::string::npos ||
+                   text.find("\"volume\"") != std::string::npos;
+  if (start.is_scene) {
+    auto sc = scene_from_json(text);
+    if (!sc) return invalid_argument(path + ": " + sc.status().message());
+    start.scene = std::move(sc).value();
+  } else {
+    auto rs = render_settings_from_json(text);
+    if (!rs) return invalid_argument(path + ": " + rs.status().message());
+    start.scene.render = std::move(rs).value();
+  }
+  start.has_window = text.find("\"window\"") != std::string::npos;
+  return start;
+}
+
+Result<SessionFlags> complete_session_flags(SessionFlags f) {
+  if (!f.start && !f.settings.empty()) {
+    VXR_ASSIGN_OR_RETURN(SettingsStart start, read_settings_file(f.settings));
+    f.start = std::move(start);
+  }
+  if (!f.start || !f.start->is_scene) return f;
+  const Scene& sc = f.start->scene;
+  if (f.channel.empty())
+    for (size_t i = 0; i < sc.channels.size(); ++i) f.channel += (i ? "," : "") + std::to_string(sc.channels[i]);
+  if (!f.timepoint_given) f.timepoint = sc.timepoint, f.timepoint_given = true;
+  if (f.voxel_size.empty() && sc.voxel_size[0] > 0.0) f.voxel_size = voxel_size_text(sc.voxel_size);
+  if (f.annotations.empty()) f.annotations = sc.annotations;
+  return f;
+}
+
+Result<SettingsChoice> choose_settings(const SessionFlags& given) {
+  VXR_ASSIGN_OR_RETURN(const SessionFlags f, complete_session_flags(given));
+  SettingsChoice c;
+  if (f.start) {
+    c.settings = f.start->scene.render;
+    c.window_given = f.start->has_window;
+    c.defaults = false;
+  } else {
+    c.settings = default_view_settings();
+  }
+  VXR_RETURN_IF_ERROR(parse_voxel_size_flag(f.voxel_size).status());
+  VXR_RETURN_IF_ERROR(apply_flags(f, c));
+  VXR_RETURN_IF_ERROR(apply_opacity_flags(f, c.settings));
+  // What does not depend on the data (colormap names, windows, steps).
+  VXR_RETURN_IF_ERROR(
+      validate_render_settings(c.settings, static_cast<uint32_t>(std::max<size_t>(1, c.settings.channels.size()))));
+  return c;
+}
+
+Result<std::vector<uint32_t>> parse_channel_flag(const std::string& text, const std::string& input,
+                                                 uint32_t volume_channels) {
+  std::vector<uint32_t> out;
+  if (text.empty()) {
+    for (uint32_t c = 0; c < std::min<uint32_t>(volume_channels, VXR_MAX_CHANNELS); ++c) out.push_back(c);
+    return out;
+  }
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    char* end = nullptr;
+    const unsigned long c = std::strtoul(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || c >= volume_channels)
+      return invalid_argument("--channel: '" + item + "', but " + input + " has " + std::to_string(volume_channels) +
+                              " channel(s) (0.." + std::to_string(volume_channels - 1) + ")");
+    if (std::find(out.begin(), out.end(), uint32_t(c)) != out.end())
+      return invalid_argument("--channel: channel " + item + " is named twice");
+    out.push_back(uint32_t(c));
+  }
+  if (out.size() > VXR_MAX_CHANNELS)
+    return invalid_argument("--channel: at most " + std::to_string(VXR_MAX_CHANNELS) + " channels are drawn together");
+  return out;
+}
+
+Status check_timepoint(const std::string& input, uint32_t timepoint, uint32_t timepoints) {
+  if (timepoint < timepoints) return Status::ok();
+  return invalid_argument("--timepoint: " + std::to_string(timepoint) + ", but " + input + " has " +
+                          std::to_string(timepoints) + " timepoint(s) (0.." + std::to_string(timepoints - 1) + ")");
+}
+
+Result<DrawnSettings> resolve_drawn_settings(SettingsChoice choice, const SessionFlags& flags, const std::string& input,
+                                             uint32_t volume_channels, uint32_t timepoints, const AutoWindow& auto_window) {
+  DrawnSettings out;
+  VXR_ASSIGN_OR_RETURN(out.channels, parse_channel_flag(flags.channel, input, volume_channels));
+  VXR_RETURN_IF_ERROR(check_timepoint(input, flags.timepoint, timepoints));
+  if (volume_channels > VXR_MAX_CHANNELS && flags.channel.empty())
+    out.notes.push_back(std::to_string(volume_channels) + " channels; drawing 0.." + std::to_string(VXR_MAX_CHANNELS - 1) +
+                        " (choose with --channel)");
+  RenderSettings& s = choice.settings;
+  const size_t n = out.channels.size();
+  // Channels without settings get their own: a distinct colour each (a copy
+  // of channel 0's settings otherwise, window included).
+  const char* hues[4] = {"green", "magenta", "cyan", "yellow"};
+  for (size_t c = s.channels.size(); c < n; ++c) {
+    ChannelSettings ch = s.channels[0];
+    ch.colormap = n > 1 ? hues[c] : ch.colormap;
+    ch.color_points.clear();
+    s.channels.push_back(ch);
+  }
+  if (s.channels.size() > n) s.channels.resize(n);
+  if (n > 1 && !choice.colormap_given && (choice.defaults || s.channels[0].colormap == "gray"))
+    s.channels[0].colormap = hues[0];
+  for (size_t c = 0; c < n && !choice.window_given; ++c) {
+    VXR_ASSIGN_OR_RETURN(const auto w, auto_window(out.channels[c]));
+    s.channels[c].window_lo = w.first;
+    s.channels[c].window_hi = w.second;
+  }
+  if (s.iso_value == RenderSettings{}.iso_value && !choice.window_given)
+    s.iso_value = 0.5 * (s.channels[0].window_lo + s.channels[0].window_hi);
+  VXR_RETURN_IF_ERROR(validate_render_settings(s, static_cast<uint32_t>(n)));
+  out.settings = std::move(s);
+  return out;
+}
+
 // Values at the 0.5 and 99.5 percentiles of a volume (sampled), in data units.
 std::pair<double, double> percentile_window(const DenseVolume& v) {
   std::vector<double> s;
@@ -200,7 +327,16 @@ Result<std::unique_ptr<ProceduralSource>> open_procedural(const std::string& spe
   return src;
 }
 
-Result<VolumeSession> open_volume_session(const std::string& given, const SessionFlags& flags) {
+Result<VolumeSession> open_volume_session(const std::string& given, const SessionFlags& given_flags,
+                                          SessionStep* failed_at) {
+  SessionStep step_unused;
+  SessionStep& step = failed_at ? *failed_at : step_unused;
+  step = SessionStep::kSettings;
+  // Flags and settings first: a bad one is reported before any file is read.
+  VXR_ASSIGN_OR_RETURN(const SessionFlags flags, complete_session_flags(given_flags));
+  VXR_ASSIGN_OR_RETURN(SettingsChoice choice, choose_settings(flags));
+  VXR_ASSIGN_OR_RETURN(const auto voxel_size, parse_voxel_size_flag(flags.voxel_size));
+  step = SessionStep::kSource;
   VolumeSession out;
   std::string input = given;
   out.annotation_store = flags.annotations;
@@ -213,28 +349,22 @@ Result<VolumeSession> open_volume_session(const std::string& given, const Sessio
   }
   if (!out.annotation_store.empty() && !std::filesystem::is_directory(out.annotation_store, ec))
     return not_found(out.annotation_store + ": no annotation store here (make one with `vxr annotate init`)");
-  out.settings = default_view_settings();
-  // Flags first: a bad flag is reported before any file is read.
-  VXR_ASSIGN_OR_RETURN(const auto voxel_size, parse_voxel_size_flag(flags.voxel_size));
-  {
-    RenderSettings scratch;
-    VXR_RETURN_IF_ERROR(apply_opacity_flags(flags, scratch));
-  }
-  bool window_known = false;
   if (input.empty()) {
     VXR_ASSIGN_OR_RETURN(DenseVolume v, assets::sample_volume());
     std::vector<DenseVolume> channels;
     channels.push_back(std::move(v));
     VXR_ASSIGN_OR_RETURN(out.source, DenseChunkSource::create(std::move(channels)));
     out.description = "the bundled sample";
-    window_known = true;  // the defaults were chosen for it
+    if (choice.defaults) choice.window_given = true;  // the defaults were chosen for it
   } else if (input.rfind("procedural:", 0) == 0) {
     VXR_ASSIGN_OR_RETURN(std::unique_ptr<ProceduralSource> p, open_procedural(input));
     out.source = std::move(p);
     out.description = input;
-    out.settings.channels[0].window_lo = 8;  // above the background noise (0..6), as `vxr render`
-    out.settings.channels[0].window_hi = 200;
-    window_known = true;
+    if (!choice.window_given) {  // `vxr bench lod`'s: above the background noise (0..6)
+      choice.settings.channels[0].window_lo = 8;
+      choice.settings.channels[0].window_hi = 200;
+      choice.window_given = true;
+    }
   } else if (is_chunk_source_input(input)) {  // .vxc, OME-Zarr: read in place
     VXR_ASSIGN_OR_RETURN(OpenedChunkSource opened, open_chunk_source(input));
     out.source = std::move(opened.source);
@@ -252,14 +382,20 @@ Result<VolumeSession> open_volume_session(const std::string& given, const Sessio
   if (voxel_size) out.source = with_voxel_size(out.source, *voxel_size);
   const VolumeInfo& info = out.source->info();
   out.description += " (" + dims_text(info) + ", " + std::to_string(out.source->levels().size()) + " levels)";
-  if (!window_known && flags.window.empty()) {
-    VXR_ASSIGN_OR_RETURN(auto w, source_window(*out.source));
-    out.settings.channels[0].window_lo = w.first;
-    out.settings.channels[0].window_hi = w.second;
-  }
-  VXR_RETURN_IF_ERROR(apply_flags(flags, out.settings));
-  VXR_RETURN_IF_ERROR(apply_opacity_flags(flags, out.settings));
-  VXR_RETURN_IF_ERROR(validate_render_settings(out.settings, 1));
+  step = SessionStep::kChannels;
+  // Windows from a level small enough to read whole (~2 M voxels).
+  const ChunkSource& src = *out.source;
+  const uint32_t window_level = finest_level_that_fits(src, 4096, uint64_t(2) << 20);
+  const AutoWindow auto_window = [&](uint32_t channel) -> Result<std::pair<double, double>> {
+    VXR_ASSIGN_OR_RETURN(DenseVolume dense, read_level_dense(src, window_level, channel, flags.timepoint, uint64_t(64) << 20));
+    return percentile_window(dense);
+  };
+  VXR_ASSIGN_OR_RETURN(DrawnSettings drawn, resolve_drawn_settings(std::move(choice), flags, given.empty() ? "the sample" : given,
+                                                                   info.channels, info.timepoints, auto_window));
+  out.settings = std::move(drawn.settings);
+  out.channels = std::move(drawn.channels);
+  out.timepoint = flags.timepoint;
+  for (std::string& n : drawn.notes) out.notes.push_back(std::move(n));
   return out;
 }
 

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -27,6 +28,18 @@
 
 namespace vxr {
 
+// The settings a session starts from instead of the defaults: a --settings
+// file (plain RenderSettings, or a Scene) or a card's Scene.
+struct SettingsStart {
+  Scene scene;              // `render` always; a Scene's camera, volume, channels, timepoint too
+  bool is_scene = false;    // a Scene: its channels, timepoint, voxel size and annotations are choices too
+  bool has_window = false;  // windows given (a card's are resolved): no window from the data
+};
+
+// --settings FILE: a Scene when it has a "render", "camera" or "volume"
+// section, else RenderSettings. Errors name the file (kNotFound, kInvalidArgument).
+Result<SettingsStart> read_settings_file(const std::string& path);
+
 struct SessionFlags {
   std::string colormap;   // empty: the default ("hot" for 8-bit data of unknown content)
   std::string window;     // "LO,HI" in data units; empty: from the data (percentiles) or the source's default
@@ -40,6 +53,12 @@ struct SessionFlags {
   // An annotation store (engine/annotate) drawn with the volume; empty: a
   // project folder's own store (NAME.vxr/annotations), else none.
   std::string annotations;
+  std::string channel;           // "2" or "0,2": the source channels drawn; empty: the first (up to 4)
+  uint32_t timepoint = 0;        // the timepoint drawn (checked against the input's count)
+  bool timepoint_given = false;  // false: a Scene's (--settings, card) timepoint, if any
+  std::string settings;          // --settings FILE: RenderSettings or Scene JSON; the flags above override it
+  // What a settings file (or a card) gave; complete_session_flags() reads `settings` into it.
+  std::optional<SettingsStart> start;
 };
 
 struct VolumeSession {
@@ -48,7 +67,45 @@ struct VolumeSession {
   std::string description;         // "procedural:vessels:65536 (u8 65536x65536x65536, 11 levels)"
   std::vector<std::string> notes;  // worth telling the user (averaged down, channel 0 of 3)
   std::string annotation_store;    // the store to draw (SessionFlags::annotations or the project's); empty: none
+  std::vector<uint32_t> channels;  // the source channels drawn, in the order of settings.channels
+  uint32_t timepoint = 0;          // the timepoint drawn
 };
+
+// The settings chosen before any volume is read: the start's (--settings or a
+// card) or the defaults, with --model --colormap --window --step --opacity
+// --opacity-unit-distance applied and checked.
+struct SettingsChoice {
+  RenderSettings settings;
+  bool window_given = false;    // by --window, the file or the card: no window from the data
+  bool colormap_given = false;  // by --colormap
+  bool defaults = true;         // no file or card: a colour per channel when there are several
+};
+Result<SettingsChoice> choose_settings(const SessionFlags& flags);
+
+// `flags` with what its start (read from --settings here) chose and the flags
+// did not: a Scene's channels, timepoint, voxel size and annotation store.
+Result<SessionFlags> complete_session_flags(SessionFlags flags);
+
+// The settings for the channels drawn: --channel (default: the first up to
+// 4, noted when there are more), --timepoint checked, then each drawn channel
+// without settings gets its own (a distinct colour per channel; a copy of
+// channel 0's otherwise) and, unless given, its window from
+// `auto_window(source channel)` at the drawn timepoint.
+struct DrawnSettings {
+  RenderSettings settings;
+  std::vector<uint32_t> channels;
+  std::vector<std::string> notes;
+};
+using AutoWindow = std::function<Result<std::pair<double, double>>(uint32_t channel)>;
+Result<DrawnSettings> resolve_drawn_settings(SettingsChoice choice, const SessionFlags& flags, const std::string& input,
+                                             uint32_t volume_channels, uint32_t timepoints, const AutoWindow& auto_window);
+
+// --channel "2" or "0,2": at most VXR_MAX_CHANNELS channels of `input`'s, each once.
+Result<std::vector<uint32_t>> parse_channel_flag(const std::string& text, const std::string& input,
+                                                 uint32_t volume_channels);
+
+// --timepoint T against the input's count: kInvalidArgument naming both.
+Status check_timepoint(const std::string& input, uint32_t timepoint, uint32_t timepoints);
 
 // The RenderSettings a viewer starts from for 8-bit data of unknown content.
 RenderSettings default_view_settings();
@@ -75,7 +132,15 @@ std::shared_ptr<const ChunkSource> with_voxel_size(std::shared_ptr<const ChunkSo
 // than one voxel). Nothing when the flag is empty.
 Status apply_voxel_size_flag(const SessionFlags& f, uint32_t shrink, std::vector<DenseVolume>& channels);
 
-Result<VolumeSession> open_volume_session(const std::string& input, const SessionFlags& flags);
+// Where open_volume_session failed: the flags or settings (a usage error),
+// opening the input, or choosing channels, timepoint and windows on it.
+enum class SessionStep { kSettings, kSource, kChannels };
+
+// The session vxr view and vxr render draw: complete_session_flags,
+// choose_settings, the source, then resolve_drawn_settings with windows from a
+// level of the source small enough to read whole.
+Result<VolumeSession> open_volume_session(const std::string& input, const SessionFlags& flags,
+                                          SessionStep* failed_at = nullptr);
 
 // `procedural:vessels:SIDE[:SEED]`: the synthetic vessel volume of `vxr bench
 // lod`, SIDE^3 voxels (up to 131072), generated on demand.
