@@ -1,12 +1,13 @@
 // `vxr render INPUT -o out.png`: one picture of a volume through the one
-// renderer vxr view uses (open_volume_session's source, the out-of-core brick
-// renderer), for every input. For comparison: --renderer dense (the dense
-// GPU ray caster, compute or fragment path) and --reference (CPU reference).
+// renderer vxr view uses, for every input. Only flags live here: the session
+// (source, settings, channels, timepoint; the same as vxr view's) is
+// render/volume_session.h, the frames render/still_render.h. For comparison:
+// --renderer dense (the dense GPU ray caster, compute or fragment path) and
+// --reference (CPU reference), with the same resolved settings.
 //
 // Settings come from --settings (a RenderSettings JSON, or a Scene JSON with
-// "render" and "camera"), then the flags override them. Without a window the
-// 0.5..99.5 percentiles of each channel are used. Bad settings exit 2 with one
-// line naming the setting.
+// "render" and "camera"), then the flags override them. Bad settings exit 2
+// with one line naming the setting.
 //
 // Cards: --save-card STORE stores the picture as a card whose Scene holds every
 // resolved choice (input, timepoint, channels, windows, camera, size,
@@ -22,7 +23,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <sstream>
 
@@ -33,18 +33,14 @@
 #include "command.h"
 #include "core/output_file.h"
 #include "core/trace.h"
-#include "render/annotation_renderer.h"
 #include "render/camera.h"
-#include "render/lod/brick_renderer.h"
 #include "render/raycaster.h"
 #include "render/reference_renderer.h"
 #include "render/transfer_function.h"
+#include "render/still_render.h"
 #include "render/volume_session.h"
 #include "scene/render_settings.h"
-#include "volume/container_reader.h"
 #include "volume/load_dense.h"
-#include "volume/open_chunk_source.h"
-#include "volume/procedural_source.h"
 #include "volume_flags.h"
 
 namespace vxr::cli {
@@ -92,13 +88,11 @@ bool parse_doubles(const std::string& text, size_t n, std::vector<double>& out) 
 
 using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
 
-// The one renderer, for every input: open_volume_session's source (a .vxc
-// container or OME-Zarr folder read in place, a procedural source, or any
-// importable file with its pyramid built in memory) through the brick
-// renderer. Without --frame-budget-ms it renders until nothing is missing
-// (every wanted brick resident) and writes that frame; with it, it
-// renders --frames frames (default 30) letting the frame-budget controller set
-// the LOD bias, and writes the last.
+// The one renderer, for every input: open_volume_session's session through
+// render_still (engine/render/still_render.h). Without --frame-budget-ms it
+// renders until nothing is missing and writes that frame; with it, --frames
+// frames (default 30) with the LOD bias following the frame time, and writes
+// the last.
 int run_lod(const Options& o, gpu::Context& gpu, uint32_t width, uint32_t height, const CameraMaker& make_camera,
             Resolved* resolved) {
   SessionStep failed_at = SessionStep::kSettings;
@@ -110,114 +104,49 @@ int run_lod(const Options& o, gpu::Context& gpu, uint32_t width, uint32_t height
     return fail(session.status(), usage ? kExitUsage : kExitFailure);
   }
   for (const std::string& n : session->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
-  const std::shared_ptr<const ChunkSource> src = session->source;
   const RenderSettings& s = session->settings;
-  const std::vector<uint32_t>* drawn = &session->channels;
-  const uint32_t timepoint = session->timepoint;
-  const VolumeInfo& info = src->info();
-  if (Status st = check_brick_settings(s, static_cast<uint32_t>(drawn->size())); !st) return fail(st, kExitUsage);
-
-  BrickRendererOptions ro;
-  ro.pool.channels = *drawn;
-  ro.preload_if_fits = true;  // small volumes: every brick in the slots vxr view gives them (same pixels)
-  auto renderer = BrickRenderer::create(gpu, *src, ro);
-  if (!renderer) return fail(renderer.status());
-  BrickRenderer& r = **renderer;
-  const VolumePlacement placement = r.placement();
+  const VolumeInfo& info = session->source->info();
+  const VolumePlacement placement{{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])},
+                                  info.voxel_size};
   Camera camera;
   if (int rc = make_camera(placement, info.dims[2] == 1, &camera); rc != kExitOk) return rc;
-  *resolved = {"lod", *drawn, s, camera};
-  // Annotations: drawn first in each frame's command buffer; rays end at them.
-  std::unique_ptr<AnnotationRenderer> annotation_renderer;
-  AnnotationScene annotations;
-  BrickRenderer::UnderlayRecorder underlay;
-  if (!session->annotation_store.empty()) {
-    auto loaded = load_annotation_scene(session->annotation_store, placement, timepoint);
-    if (!loaded) return fail(loaded.status());
-    annotations = std::move(loaded).value();
-    auto ar = AnnotationRenderer::create(gpu);
-    if (!ar) return fail(ar.status());
-    annotation_renderer = std::move(ar).value();
-    underlay = [&](VkCommandBuffer cmd) { return annotation_renderer->record(cmd, 0, camera, annotations, width, height); };
-  }
+  *resolved = {"lod", session->channels, s, camera};
 
-  BrickFrameSettings frame;
-  frame.lod.lod_bias = o.lod_bias;
-  frame.lod.timepoint = timepoint;
+  StillOptions so;
+  so.width = width;
+  so.height = height;
+  so.lod_bias = o.lod_bias;
+  so.frame_budget_ms = o.frame_budget_ms;
+  so.frames = o.frames;
+  so.skip_empty = !o.no_skip;
+  so.compare_to_reference = o.json && o.reference;
+  so.reference_step = o.reference_step;
   const bool budget = o.frame_budget_ms > 0.0;
-  FrameBudget controller;
-  controller.target_ms = o.frame_budget_ms;
-  controller.bias = o.lod_bias;
-  frame.lod.skip_empty = !o.no_skip;
-  const int max_frames = o.frames > 0 ? o.frames : budget ? 30 : 1000;
-  // --json --reference: the CPU reference of the finest level, once, to measure each frame against.
-  std::vector<uint8_t> reference_pixels;
-  double reference_ms = 0.0;
-  if (o.json && o.reference) {
-    std::vector<DenseVolume> level0;
-    for (uint32_t c : *drawn) {
-      auto dense = read_level_dense(*src, 0, c, timepoint, uint64_t(1) << 30);
-      if (!dense) return fail(dense.status());
-      level0.push_back(std::move(dense).value());
-    }
-    const auto r0 = std::chrono::steady_clock::now();
-    auto ref = render_reference(level0, camera, s, width, height, {o.reference_step, 0});
-    if (!ref) return fail(ref.status());
-    reference_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - r0).count();
-    reference_pixels = over_black(to_rgba8(*ref)).pixels;
+  if (budget && o.stats)
+    so.on_frame = [](const StillFrame& f) {
+      std::printf("frame %d: bias %.2f, %.1f ms, drawn %llu, missing %llu\n", f.frame, f.lod_bias, f.wall_ms,
+                  (unsigned long long)f.bricks_drawn, (unsigned long long)f.bricks_missing);
+    };
+  auto still = render_still(gpu, *session, camera, so);
+  if (!still) {
+    const Status& st = still.status();
+    if (st.code() == ErrorCode::kInternal) return fail(Status(st.code(), o.input + ": " + st.message()));
+    return fail(st, st.code() == ErrorCode::kInvalidArgument ? kExitUsage : kExitFailure);
   }
-  nlohmann::json frames_json = nlohmann::json::array();
-  BrickFrameStats st;
-  // create() uploaded the pinned bricks (top level; every brick of a volume that fits).
-  uint64_t total_bricks = r.pool().used(), total_bytes = total_bricks * r.pool().brick_bytes();
-  std::vector<double> frame_ms;
-  Result<ImageRgba8> image = invalid_argument("unset");
-  int frames = 0;
-  bool converged = false;
-  const auto t0 = std::chrono::steady_clock::now();
-  while (frames < max_frames) {
-    if (budget) frame.lod.lod_bias = controller.bias;
-    const auto f0 = std::chrono::steady_clock::now();
-    image = r.render(camera, s, frame, width, height, &st, underlay);
-    if (!image) return fail(image.status(), image.status().code() == ErrorCode::kInvalidArgument ? kExitUsage : kExitFailure);
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - f0).count();
-    frame_ms.push_back(ms);
-    ++frames;
-    if (o.json) {
-      nlohmann::json fj = {{"frame", frames},           {"wall_ms", ms},
-                           {"gpu_ms", st.gpu_ms},       {"samples", st.samples},
-                           {"bricks_drawn", st.lod.drawn}, {"bricks_missing", st.lod.missing},
-                           {"bricks_uploaded", st.bricks_uploaded}};
-      if (!reference_pixels.empty()) {
-        // 8-bit units over black, all four channels: what `vxr compare` reports.
-        const std::vector<uint8_t> px = over_black(*image).pixels;
-        double sq = 0.0;
-        for (size_t i = 0; i < px.size(); ++i) {
-          const double d = double(px[i]) - double(reference_pixels[i]);
-          sq += d * d;
-        }
-        fj["rmse_vs_reference"] = std::sqrt(sq / double(px.size()));
-      }
+  if (Status e = write_png(o.output, over_black(still->image)); !e) return fail(e);
+  if (o.json) {
+    nlohmann::json frames_json = nlohmann::json::array();
+    for (const StillFrame& f : still->frames) {
+      nlohmann::json fj = {{"frame", f.frame},
+                           {"wall_ms", f.wall_ms},
+                           {"gpu_ms", f.gpu_ms},
+                           {"samples", f.samples},
+                           {"bricks_drawn", f.bricks_drawn},
+                           {"bricks_missing", f.bricks_missing},
+                           {"bricks_uploaded", f.bricks_uploaded}};
+      if (f.rmse_vs_reference >= 0.0) fj["rmse_vs_reference"] = f.rmse_vs_reference;
       frames_json.push_back(fj);
     }
-    total_bytes += st.bytes_uploaded;
-    total_bricks += st.bricks_uploaded;
-    if (budget) {
-      if (o.stats)
-        std::printf("frame %d: bias %.2f, %.1f ms, drawn %llu, missing %llu\n", frames, frame.lod.lod_bias, ms,
-                    (unsigned long long)st.lod.drawn, (unsigned long long)st.lod.missing);
-      controller.update(ms);
-      continue;
-    }
-    converged = st.lod.missing == 0;
-    if (converged && o.frames == 0) break;
-  }
-  const double total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  if (!budget && o.frames == 0 && !converged)
-    return fail(internal_error(o.input + ": the view still missed bricks after " + std::to_string(frames) +
-                               " frames; raise --lod-bias or render fewer pixels"));
-  if (Status e = write_png(o.output, over_black(*image)); !e) return fail(e);
-  if (o.json) {
     nlohmann::json j = {{"output", o.output},
                         {"width", width},
                         {"height", height},
@@ -226,23 +155,27 @@ int run_lod(const Options& o, gpu::Context& gpu, uint32_t width, uint32_t height
                         {"empty_space_skipping", !o.no_skip},
                         {"device", gpu.info().name},
                         {"frames", frames_json}};
-    if (o.reference) j["reference"] = {{"step_voxels", o.reference_step}, {"cpu_ms", reference_ms}};
+    if (o.reference) j["reference"] = {{"step_voxels", o.reference_step}, {"cpu_ms", still->reference_cpu_ms}};
     std::printf("%s\n", j.dump(2).c_str());
     return kExitOk;
   }
+  const int frames = int(still->frames.size());
   std::printf("%s: %ux%u, %s, out-of-core (lod), %d frames%s, %.1f ms\n", o.output.c_str(), width, height,
-              optical_model_name(s.model), frames, converged ? " to converge" : "", total_ms);
+              optical_model_name(s.model), frames, still->converged ? " to converge" : "", still->total_ms);
   if (budget) {
     // Median of the last few frames: what the controller settled on.
-    std::vector<double> tail(frame_ms.end() - std::min<size_t>(frame_ms.size(), 5), frame_ms.end());
+    std::vector<double> tail;
+    for (size_t i = still->frames.size() - std::min<size_t>(still->frames.size(), 5); i < still->frames.size(); ++i)
+      tail.push_back(still->frames[i].wall_ms);
     std::sort(tail.begin(), tail.end());
     std::printf("frame budget: target %.1f ms, bias %.2f -> %.2f, last frames %.1f ms (median of %zu)\n",
-                o.frame_budget_ms, o.lod_bias, frame.lod.lod_bias, tail[tail.size() / 2], tail.size());
+                o.frame_budget_ms, o.lod_bias, still->frames.back().lod_bias, tail[tail.size() / 2], tail.size());
   }
   if (o.stats) {
-    std::printf("stats: %s\n", format_stats(st).c_str());
+    std::printf("stats: %s\n", format_stats(still->last).c_str());
     std::printf("stats: %d frames, %llu bricks %.2f MiB uploaded in all, pool %u of %u bricks\n", frames,
-                (unsigned long long)total_bricks, double(total_bytes) / (1 << 20), r.pool().used(), r.pool().capacity());
+                (unsigned long long)still->bricks_uploaded, double(still->bytes_uploaded) / (1 << 20), still->pool_used,
+                still->pool_capacity);
   }
   return kExitOk;
 }

@@ -1,0 +1,119 @@
+#include "render/still_render.h"
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include "render/annotation_renderer.h"
+#include "render/raycaster.h"
+#include "render/reference_renderer.h"
+#include "volume/container_reader.h"
+
+namespace vxr {
+namespace {
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The CPU reference of the finest level of the drawn channels, over black.
+Result<std::vector<uint8_t>> reference_pixels(const VolumeSession& session, const Camera& camera, const StillOptions& o,
+                                              double* cpu_ms) {
+  std::vector<DenseVolume> level0;
+  for (uint32_t c : session.channels) {
+    VXR_ASSIGN_OR_RETURN(DenseVolume dense, read_level_dense(*session.source, 0, c, session.timepoint, uint64_t(1) << 30));
+    level0.push_back(std::move(dense));
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  VXR_ASSIGN_OR_RETURN(ImageRgbaF ref,
+                       render_reference(level0, camera, session.settings, o.width, o.height, {o.reference_step, 0}));
+  *cpu_ms = ms_since(t0);
+  return over_black(to_rgba8(ref)).pixels;
+}
+
+// 8-bit units over black, all four channels: what `vxr compare` reports.
+double rmse(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+  double sq = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const double d = double(a[i]) - double(b[i]);
+    sq += d * d;
+  }
+  return std::sqrt(sq / double(a.size()));
+}
+
+}  // namespace
+
+Result<StillResult> render_still(gpu::Context& gpu, const VolumeSession& session, const Camera& camera,
+                                 const StillOptions& o) {
+  const RenderSettings& s = session.settings;
+  VXR_RETURN_IF_ERROR(check_brick_settings(s, static_cast<uint32_t>(session.channels.size())));
+  BrickRendererOptions ro;
+  ro.pool.channels = session.channels;
+  ro.preload_if_fits = true;  // small volumes: every brick in the slots vxr view gives them (same pixels)
+  VXR_ASSIGN_OR_RETURN(std::unique_ptr<BrickRenderer> renderer, BrickRenderer::create(gpu, *session.source, ro));
+  BrickRenderer& r = *renderer;
+  // Annotations: drawn first in each frame's command buffer; rays end at them.
+  std::unique_ptr<AnnotationRenderer> annotation_renderer;
+  AnnotationScene annotations;
+  BrickRenderer::UnderlayRecorder underlay;
+  if (!session.annotation_store.empty()) {
+    VXR_ASSIGN_OR_RETURN(annotations, load_annotation_scene(session.annotation_store, r.placement(), session.timepoint));
+    VXR_ASSIGN_OR_RETURN(annotation_renderer, AnnotationRenderer::create(gpu));
+    underlay = [&](VkCommandBuffer cmd) {
+      return annotation_renderer->record(cmd, 0, camera, annotations, o.width, o.height);
+    };
+  }
+
+  StillResult out;
+  std::vector<uint8_t> reference;
+  if (o.compare_to_reference) {
+    VXR_ASSIGN_OR_RETURN(reference, reference_pixels(session, camera, o, &out.reference_cpu_ms));
+  }
+  BrickFrameSettings frame;
+  frame.lod.lod_bias = o.lod_bias;
+  frame.lod.timepoint = session.timepoint;
+  frame.lod.skip_empty = o.skip_empty;
+  const bool budget = o.frame_budget_ms > 0.0;
+  FrameBudget controller;
+  controller.target_ms = o.frame_budget_ms;
+  controller.bias = o.lod_bias;
+  const int max_frames = o.frames > 0 ? o.frames : budget ? 30 : 1000;
+  // create() uploaded the pinned bricks (top level; every brick of a volume that fits).
+  out.bricks_uploaded = r.pool().used();
+  out.bytes_uploaded = out.bricks_uploaded * r.pool().brick_bytes();
+  const auto t0 = std::chrono::steady_clock::now();
+  while (int(out.frames.size()) < max_frames) {
+    if (budget) frame.lod.lod_bias = controller.bias;
+    const auto f0 = std::chrono::steady_clock::now();
+    VXR_ASSIGN_OR_RETURN(out.image, r.render(camera, s, frame, o.width, o.height, &out.last, underlay));
+    StillFrame f;
+    f.wall_ms = ms_since(f0);
+    f.frame = int(out.frames.size()) + 1;
+    f.gpu_ms = out.last.gpu_ms;
+    f.lod_bias = frame.lod.lod_bias;
+    f.samples = out.last.samples;
+    f.bricks_drawn = out.last.lod.drawn;
+    f.bricks_missing = out.last.lod.missing;
+    f.bricks_uploaded = out.last.bricks_uploaded;
+    if (!reference.empty()) f.rmse_vs_reference = rmse(over_black(out.image).pixels, reference);
+    out.frames.push_back(f);
+    out.bytes_uploaded += out.last.bytes_uploaded;
+    out.bricks_uploaded += out.last.bricks_uploaded;
+    if (o.on_frame) o.on_frame(f);
+    if (budget) {
+      controller.update(f.wall_ms);
+      continue;
+    }
+    out.converged = out.last.lod.missing == 0;
+    if (out.converged && o.frames == 0) break;
+  }
+  out.total_ms = ms_since(t0);
+  out.pool_used = r.pool().used();
+  out.pool_capacity = r.pool().capacity();
+  if (!budget && o.frames == 0 && !out.converged)
+    return internal_error("the view still missed bricks after " + std::to_string(out.frames.size()) +
+                          " frames; raise --lod-bias or render fewer pixels");
+  return out;
+}
+
+}  // namespace vxr
