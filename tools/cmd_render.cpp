@@ -19,11 +19,9 @@
 // against the CPU reference of the finest level; --no-skip marches empty
 // space too (the same image; for A/B timing).
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <functional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -35,12 +33,10 @@
 #include "core/trace.h"
 #include "render/camera.h"
 #include "render/raycaster.h"
-#include "render/reference_renderer.h"
 #include "render/transfer_function.h"
 #include "render/still_render.h"
 #include "render/volume_session.h"
 #include "scene/render_settings.h"
-#include "volume/load_dense.h"
 #include "volume_flags.h"
 
 namespace vxr::cli {
@@ -86,14 +82,12 @@ bool parse_doubles(const std::string& text, size_t n, std::vector<double>& out) 
   return out.size() == n;
 }
 
-using CameraMaker = std::function<int(const VolumePlacement&, bool, Camera*)>;
-
 // The one renderer, for every input: open_volume_session's session through
 // render_still (engine/render/still_render.h). Without --frame-budget-ms it
 // renders until nothing is missing and writes that frame; with it, --frames
 // frames (default 30) with the LOD bias following the frame time, and writes
 // the last.
-int run_lod(const Options& o, gpu::Context& gpu, uint32_t width, uint32_t height, const CameraMaker& make_camera,
+int run_lod(const Options& o, gpu::Context& gpu, uint32_t width, uint32_t height, const CameraChooser& camera_for,
             Resolved* resolved) {
   SessionStep failed_at = SessionStep::kSettings;
   auto session = open_volume_session(o.input, o.flags, &failed_at);
@@ -108,8 +102,9 @@ int run_lod(const Options& o, gpu::Context& gpu, uint32_t width, uint32_t height
   const VolumeInfo& info = session->source->info();
   const VolumePlacement placement{{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])},
                                   info.voxel_size};
-  Camera camera;
-  if (int rc = make_camera(placement, info.dims[2] == 1, &camera); rc != kExitOk) return rc;
+  auto chosen = camera_for(placement, info.dims[2] == 1);
+  if (!chosen) return fail(chosen.status(), kExitUsage);
+  const Camera& camera = *chosen;
   *resolved = {"lod", session->channels, s, camera};
 
   StillOptions so;
@@ -259,8 +254,7 @@ int run(const Options& given) {
     scene = o.flags.start->scene;
     if (o.flags.start->is_scene) adopt_scene_choices(scene);
   }
-  auto choice = choose_settings(o.flags);
-  if (!choice) return fail(choice.status(), kExitUsage);
+  if (auto choice = choose_settings(o.flags); !choice) return fail(choice.status(), kExitUsage);
   uint32_t width = 0, height = 0;
   if (std::sscanf(o.size.c_str(), "%ux%u", &width, &height) != 2 || width == 0 || height == 0 || width > 16384 ||
       height > 16384)
@@ -320,7 +314,7 @@ int run(const Options& given) {
   Camera world_camera;  // before the volume transform: what a card stores
   Resolved resolved;
   // The camera: the default orbit view, then the scene's, then the flags.
-  auto make_camera = [&](const VolumePlacement& placement, bool flat, Camera* out) -> int {
+  const CameraChooser camera_for = [&](const VolumePlacement& placement, bool flat) -> Result<Camera> {
     Camera camera = flat ? orbit_camera(placement, 0.0, 90.0 - 1e-3, 1.1) : orbit_camera(placement, 30.0, 25.0, 1.25);
     if (scene.has_camera) {
       camera.eye = {scene.camera.eye[0], scene.camera.eye[1], scene.camera.eye[2]};
@@ -331,19 +325,18 @@ int run(const Options& given) {
     if (!o.camera.empty()) {
       std::vector<double> c;
       if (!parse_doubles(o.camera, 9, c))
-        return fail(invalid_argument("--camera: expected 9 numbers px,py,pz,tx,ty,tz,ux,uy,uz (world units, volume "
-                                     "centred at 0), got '" + o.camera + "'"),
-                    kExitUsage);
+        return invalid_argument("--camera: expected 9 numbers px,py,pz,tx,ty,tz,ux,uy,uz (world units, volume "
+                                "centred at 0), got '" + o.camera + "'");
       camera.eye = {c[0], c[1], c[2]};
       camera.target = {c[3], c[4], c[5]};
       camera.up = {c[6], c[7], c[8]};
     }
     if (o.fov != 0.0) {
-      if (!(o.fov > 0.0 && o.fov < 179.0)) return fail(invalid_argument("--fov: must be in (0, 179) degrees"), kExitUsage);
+      if (!(o.fov > 0.0 && o.fov < 179.0)) return invalid_argument("--fov: must be in (0, 179) degrees");
       camera.fov_y_deg = o.fov;
     }
     if (glm::length(camera.target - camera.eye) == 0.0)
-      return fail(invalid_argument("--camera: the eye and the target are the same point"), kExitUsage);
+      return invalid_argument("--camera: the eye and the target are the same point");
     world_camera = camera;
     // The renderers draw the volume at the origin: a moved, turned or scaled
     // volume is drawn by moving the camera the opposite way.
@@ -357,8 +350,7 @@ int run(const Options& given) {
       camera.target = {v.target[0], v.target[1], v.target[2]};
       camera.up = {v.up[0], v.up[1], v.up[2]};
     }
-    *out = camera;
-    return kExitOk;
+    return camera;
   };
   auto finish = [&](int rc) {
     if (rc != kExitOk || o.save_card.empty()) return rc;
@@ -366,52 +358,30 @@ int run(const Options& given) {
     return save_card(o, scene, resolved, width, height);
   };
 
-  if (renderer == "lod") return finish(run_lod(o, *gpu, width, height, make_camera, &resolved));
+  if (renderer == "lod") return finish(run_lod(o, *gpu, width, height, camera_for, &resolved));
 
-  auto loaded = load_for_render(o.input, max_dim, uint64_t(1) << 30);
-  if (!loaded) return fail(loaded.status());
-  for (const auto& note : loaded->notes) std::fprintf(stderr, "vxr: note: %s\n", note.c_str());
-  std::vector<DenseVolume>& channels = loaded->channels;
-  if (Status st = apply_voxel_size_flag(o.flags, loaded->shrink, channels); !st) return fail(st, kExitUsage);
-  // The same choices as the session's, with windows from the whole volume loaded.
-  auto drawn = resolve_drawn_settings(*choice, o.flags, o.input, static_cast<uint32_t>(channels.size()), 1,
-                                      [&](uint32_t c) -> Result<std::pair<double, double>> { return percentile_window(channels[c]); });
-  if (!drawn) return fail(drawn.status(), kExitUsage);
-  for (const std::string& n : drawn->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
-  {
-    std::vector<DenseVolume> picked;
-    for (uint32_t c : drawn->channels) picked.push_back(std::move(channels[c]));
-    channels = std::move(picked);
+  DenseStillOptions dense;
+  dense.width = width;
+  dense.height = height;
+  dense.renderer = o.reference ? DenseRenderer::kReference
+                   : o.path == "fragment" ? DenseRenderer::kFragment
+                                          : DenseRenderer::kCompute;
+  dense.reference_step = o.reference_step;
+  dense.max_dim = max_dim;
+  SessionStep failed_at = SessionStep::kSettings;
+  auto still = render_still_dense(gpu.get(), o.input, o.flags, camera_for, dense, &failed_at);
+  if (!still) {
+    const bool usage = failed_at != SessionStep::kSource && still.status().code() == ErrorCode::kInvalidArgument;
+    return fail(still.status(), usage ? kExitUsage : kExitFailure);
   }
-  const RenderSettings& s = drawn->settings;
-  const VolumePlacement placement{channels[0].dims, channels[0].voxel_size};
-  Camera camera;
-  if (int rc = make_camera(placement, channels[0].dims[2] == 1, &camera); rc != kExitOk) return rc;
-  resolved = {"dense", drawn->channels, s, camera};
-
-  const auto t0 = std::chrono::steady_clock::now();
-  Result<ImageRgbaF> image = invalid_argument("unset");
-  if (o.reference) {
-    image = render_reference(channels, camera, s, width, height, {o.reference_step, 0});
-  } else {
-    auto caster = Raycaster::create(*gpu);
-    if (!caster) return fail(caster.status());
-    if (Status st = (*caster)->set_channels(channels); !st) return fail(st);
-    image = (*caster)->render_float(camera, s, width, height,
-                                    o.path == "fragment" ? RenderPath::kFragment : RenderPath::kCompute);
-  }
-  if (!image) return fail(image.status(), image.status().code() == ErrorCode::kInvalidArgument ? kExitUsage : kExitFailure);
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  if (Status st = write_png(o.output, over_black(to_rgba8(*image))); !st) return fail(st);
-  std::printf("%s: %ux%u, %s, %s, %.1f ms\n", o.output.c_str(), width, height, optical_model_name(s.model),
-              o.reference ? "CPU reference" : (o.path + " path").c_str(), ms);
-  if (o.stats) {
-    // The dense renderer keeps no counters: the samples are counted here from
-    // the rays (slab test per pixel), before early termination.
-    const uint64_t n = dense_sample_count(camera, placement, s.step_voxels, width, height);
-    std::printf("stats: renderer dense, shrink %u, samples <= %llu (before early termination), %.1f ms\n",
-                loaded->shrink, (unsigned long long)n, ms);
-  }
+  for (const std::string& n : still->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
+  resolved = {"dense", still->channels, still->settings, still->camera};
+  if (Status st = write_png(o.output, over_black(still->image)); !st) return fail(st);
+  std::printf("%s: %ux%u, %s, %s, %.1f ms\n", o.output.c_str(), width, height, optical_model_name(still->settings.model),
+              o.reference ? "CPU reference" : (o.path + " path").c_str(), still->ms);
+  if (o.stats)
+    std::printf("stats: renderer dense, shrink %u, samples <= %llu (before early termination), %.1f ms\n", still->shrink,
+                (unsigned long long)still->sample_bound, still->ms);
   return finish(kExitOk);
 }
 

@@ -8,6 +8,7 @@
 #include "render/raycaster.h"
 #include "render/reference_renderer.h"
 #include "volume/container_reader.h"
+#include "volume/load_dense.h"
 
 namespace vxr {
 namespace {
@@ -113,6 +114,54 @@ Result<StillResult> render_still(gpu::Context& gpu, const VolumeSession& session
   if (!budget && o.frames == 0 && !out.converged)
     return internal_error("the view still missed bricks after " + std::to_string(out.frames.size()) +
                           " frames; raise --lod-bias or render fewer pixels");
+  return out;
+}
+
+Result<DenseStill> render_still_dense(gpu::Context* gpu, const std::string& input, const SessionFlags& given_flags,
+                                      const CameraChooser& camera_for, const DenseStillOptions& o,
+                                      SessionStep* failed_at) {
+  SessionStep step_unused;
+  SessionStep& step = failed_at ? *failed_at : step_unused;
+  step = SessionStep::kSettings;
+  VXR_ASSIGN_OR_RETURN(const SessionFlags flags, complete_session_flags(given_flags));
+  VXR_ASSIGN_OR_RETURN(SettingsChoice choice, choose_settings(flags));
+  if (o.renderer != DenseRenderer::kReference && !gpu) return invalid_argument("the dense GPU ray caster needs a GPU");
+  step = SessionStep::kSource;
+  VXR_ASSIGN_OR_RETURN(LoadedVolume loaded, load_for_render(input, o.max_dim, uint64_t(1) << 30));
+  DenseStill out;
+  out.notes = loaded.notes;
+  out.shrink = loaded.shrink;
+  step = SessionStep::kChannels;
+  std::vector<DenseVolume>& channels = loaded.channels;
+  VXR_RETURN_IF_ERROR(apply_voxel_size_flag(flags, loaded.shrink, channels));
+  VXR_ASSIGN_OR_RETURN(DrawnSettings drawn,
+                       resolve_drawn_settings(std::move(choice), flags, input, static_cast<uint32_t>(channels.size()), 1,
+                                              [&](uint32_t c) -> Result<std::pair<double, double>> {
+                                                return percentile_window(channels[c]);
+                                              }));
+  for (std::string& n : drawn.notes) out.notes.push_back(std::move(n));
+  std::vector<DenseVolume> picked;
+  for (uint32_t c : drawn.channels) picked.push_back(std::move(channels[c]));
+  out.settings = std::move(drawn.settings);
+  out.channels = std::move(drawn.channels);
+  const VolumePlacement placement{picked[0].dims, picked[0].voxel_size};
+  VXR_ASSIGN_OR_RETURN(out.camera, camera_for(placement, picked[0].dims[2] == 1));
+
+  const auto t0 = std::chrono::steady_clock::now();
+  ImageRgbaF image;
+  if (o.renderer == DenseRenderer::kReference) {
+    VXR_ASSIGN_OR_RETURN(image, render_reference(picked, out.camera, out.settings, o.width, o.height, {o.reference_step, 0}));
+  } else {
+    VXR_ASSIGN_OR_RETURN(std::unique_ptr<Raycaster> caster, Raycaster::create(*gpu));
+    VXR_RETURN_IF_ERROR(caster->set_channels(picked));
+    VXR_ASSIGN_OR_RETURN(image, caster->render_float(out.camera, out.settings, o.width, o.height,
+                                                     o.renderer == DenseRenderer::kFragment ? RenderPath::kFragment
+                                                                                            : RenderPath::kCompute));
+  }
+  out.ms = ms_since(t0);
+  out.image = to_rgba8(image);
+  // The dense renderer keeps no counters: the samples are counted from the rays, before early termination.
+  out.sample_bound = dense_sample_count(out.camera, placement, out.settings.step_voxels, o.width, o.height);
   return out;
 }
 
