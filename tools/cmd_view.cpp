@@ -88,6 +88,8 @@ Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, co
                             : std::filesystem::absolute(o.input, ec).string();
   setup->scene.render = session.settings;  // a card's or --settings' with the flags applied
   setup->scene.timepoint = session.timepoint;
+  setup->scene.channels = session.channels;  // a card saved in the window restores the channels drawn
+  if (auto vs = parse_voxel_size_flag(o.flags.voxel_size); vs.is_ok() && vs->has_value()) setup->scene.voxel_size = **vs;
   setup->timepoints = info.timepoints;
   setup->data_range = slider_range(info, session.settings);
   setup->placement = placement;
@@ -141,7 +143,6 @@ int run(const Options& given) {
       return fail(sc.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage : kExitFailure);
     }
     if (o.input.empty() && !o.sample) o.input = sc->volume;
-    if (o.flags.annotations.empty()) o.flags.annotations = sc->annotations;
     if (!o.lod_bias_given) o.lod_bias = sc->lod_bias;
     if (sc->renderer == "dense")
       std::fprintf(stderr, "vxr view: note: card %s was drawn by the dense renderer; the view draws it out of core\n",
@@ -151,12 +152,14 @@ int run(const Options& given) {
   }
   if (!o.flags.settings.empty()) {
     if (Status st = check_input(o.flags.settings); !st) return fail(st, kExitUsage);
-    auto completed = complete_session_flags(o.flags);  // read once: its camera is the headless view's too
-    if (!completed) return fail(completed.status(), kExitUsage);
-    o.flags = std::move(completed).value();
-    if (o.flags.start && o.flags.start->is_scene && o.flags.start->scene.has_camera && o.movie.empty() && o.script.empty())
-      pose = o.flags.start->scene;
   }
+  // --settings read once (its camera is the headless view's too), a Scene's or card's choices adopted.
+  auto completed = complete_session_flags(o.flags);
+  if (!completed) return fail(completed.status(), kExitUsage);
+  o.flags = std::move(completed).value();
+  if (!pose && o.flags.start && o.flags.start->is_scene && o.flags.start->scene.has_camera && o.movie.empty() &&
+      o.script.empty())
+    pose = o.flags.start->scene;
   if (o.frame_budget_ms < 0.0) return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
   if (!o.json.empty()) {
     const std::string inputs[] = {o.input};
