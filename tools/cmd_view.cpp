@@ -95,7 +95,7 @@ Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, co
   setup->placement = placement;
   setup->transform = transform;
   for (uint32_t c : session.channels) {
-    auto histogram = xr::coarse_histogram(*session.source, c, 0, setup->data_range);
+    auto histogram = xr::coarse_histogram(*session.source, c, session.timepoint, setup->data_range);
     if (!histogram) return histogram.status();
     setup->histograms.push_back(std::move(histogram).value());
   }
