@@ -274,12 +274,19 @@ int run(const Options& given) {
   vo.frame.lod.timepoint = card ? card->timepoint : o.timepoint;
   vo.frame_budget_ms = o.frame_budget_ms;
   // The desktop viewer holds the store open itself (its tools edit it) and draws its markers over the volume.
-  const bool viewer_has_store = req.viewer && req.viewer->store;
-  // Otherwise the session holds it: the hands' tools edit it and it is drawn from there.
+  const bool viewer_has_store = choice->kind == xr::TargetKind::kDesktop && req.viewer && req.viewer->store;
+  if (viewer_has_store && o.tool_given)
+    std::fprintf(stderr, "vxr view: note: --tool/--class set the controllers' tools; the window's tools panel picks "
+                         "its own\n");
+  // Otherwise the session holds it (the one opened for a window not chosen, one LevelDB lock):
+  // the hands' tools edit it and it is drawn from there.
   if (!session->annotation_store.empty() && !viewer_has_store) {
-    auto store = annotate::AnnotationStore::open(session->annotation_store, false);
-    if (!store) return fail(store.status());
-    vo.tool_store = std::move(store).value();
+    vo.tool_store = req.viewer ? req.viewer->store : nullptr;
+    if (!vo.tool_store) {
+      auto store = annotate::AnnotationStore::open(session->annotation_store, false);
+      if (!store) return fail(store.status());
+      vo.tool_store = std::move(store).value();
+    }
     vo.hand_tools.tool = *annotate::tool_from_name(o.tool);  // checked by the flag
     vo.hand_tools.count_class = o.tool_class;
     vo.on_tool_report = [](const std::string& line) {

@@ -68,7 +68,6 @@ struct FrameCommands {
   }
 };
 
-// One run of a target: returns kRestart when the target lost its session.
 // The hands' tools over the store the session holds, and the scene drawn from it.
 struct SessionTools {
   HandTools& hands;
@@ -91,7 +90,11 @@ struct SessionTools {
     if (!r.error.empty()) report(std::string("tool ") + annotate::tool_name(hands.tool()) + ": " + r.error);
     if (r.stored || r.tool_changed) report(hands.report());
     if (hands.tools().revision() != drawn_revision || timepoint != drawn_timepoint || hands.tool() != drawn_tool) {
-      VXR_ASSIGN_OR_RETURN(stored, hands.stored_scene(timepoint));
+      // A store unreadable from the start ends the run; later, the last picture stays and says why.
+      auto scene = hands.stored_scene(timepoint);
+      if (!scene && drawn_revision == UINT64_MAX) return scene.status();
+      if (scene) stored = std::move(scene).value();
+      else log_warn("view: " + hands.tools().store().path() + ": " + scene.status().message());
       drawn_revision = hands.tools().revision();
       drawn_timepoint = timepoint;
       drawn_tool = hands.tool();
@@ -102,6 +105,7 @@ struct SessionTools {
   }
 };
 
+// One run of a target: returns kRestart when the target lost its session.
 Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkSource>& source,
                          const ViewOptions& options, GrabInteraction& grab, FrameBudget& budget, HandTools* hands,
                          ViewStats& stats) {
