@@ -218,6 +218,56 @@ TEST_CASE("hand tools: measuring previews while held and stores the length on re
   CHECK(store->measurements()->size() == 1);
 }
 
+TEST_CASE("hand tools: tracing chains a node per press; roi drags a box while held, drawn live, stored on release") {
+  auto store = fresh_store(fs::path(VXR_TEST_OUT_DIR) / "hand_tools" / "trace_roi");
+  ViewerTools tools(*store);
+  HandToolSettings settings;
+  settings.tool = Tool::kTrace;
+  HandTools hands(tools, kPlacement, settings);
+  const xr::VolumeTransform t = plain();
+  const glm::dvec3 a{0.0, 1.5, -0.5}, b{0.004, 1.502, -0.498};
+  for (const glm::dvec3& tip : {a, b}) {
+    hands.update(right_at(tip, 0.0), t, 0);
+    REQUIRE(hands.update(right_at(tip, 1.0), t, 0).stored);
+  }
+  auto skeletons = store->skeletons();
+  REQUIRE(skeletons.is_ok());
+  REQUIRE(skeletons->size() == 1);
+  auto sk = store->skeleton((*skeletons)[0].id);
+  REQUIRE(sk.is_ok());
+  REQUIRE(sk->nodes().size() == 2);
+  const annotate::SkeletonNode& first = sk->nodes().begin()->second;
+  const annotate::SkeletonNode& second = std::next(sk->nodes().begin())->second;
+  CHECK(first.parent == annotate::kNoParent);
+  CHECK(second.parent == first.id);
+  CHECK(second.pos[0] == doctest::Approx(32.0 + 8.0));  // 4 mm at 0.5 mm per voxel
+  auto drawn = hands.stored_scene(0);
+  REQUIRE(drawn.is_ok());
+  CHECK(drawn->spheres.size() == 2);  // the nodes, as vxr render draws them
+  CHECK(drawn->cones.size() == 1);    // and the edge between them
+
+  InputState menu = right_at(b, 0.0);
+  menu.hands[kRight].menu = true;
+  hands.update(menu, t, 0);  // trace -> track
+  hands.update(right_at(b, 0.0), t, 0);
+  hands.update(menu, t, 0);  // track -> roi
+  REQUIRE(hands.tool() == Tool::kRoi);
+  hands.update(right_at(a, 0.0), t, 0);
+  CHECK(!hands.update(right_at(a, 1.0), t, 0).stored);
+  CHECK(!hands.update(right_at(b, 1.0), t, 0).stored);
+  AnnotationScene live;
+  hands.add_live(right_at(b, 1.0), t, live);
+  CHECK(live.cones.size() == 12);  // the box's edges while it is dragged
+  CHECK(hands.update(right_at(b, 0.0), t, 0).stored);
+  auto rois = store->rois();
+  REQUIRE(rois.is_ok());
+  REQUIRE(rois->size() == 1);
+  CHECK((*rois)[0].min[0] == doctest::Approx(32.0));
+  CHECK((*rois)[0].max[0] == doctest::Approx(40.0));
+  CHECK((*rois)[0].max[1] == doctest::Approx(18.0));
+  CHECK((*rois)[0].max[2] == doctest::Approx(9.0));
+}
+
 TEST_CASE("hand tools: the trigger never grabs; the volume moves only on squeeze") {
   xr::VolumeTransform t = plain();
   GrabInteraction grab;
