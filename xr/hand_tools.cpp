@@ -1,6 +1,5 @@
 #include "xr/hand_tools.h"
 
-#include <cstdio>
 
 #include "annotate/annotation_store.h"
 
