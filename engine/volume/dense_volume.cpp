@@ -41,10 +41,8 @@ std::optional<DType> dtype_from_name(std::string_view name) {
   return std::nullopt;
 }
 
-double DenseVolume::value_at(uint32_t x, uint32_t y, uint32_t z) const {
-  const uint64_t i = (uint64_t(z) * dims[1] + y) * dims[0] + x;
-  const uint8_t* p = data.data() + i * dtype_bytes(dtype);
-  switch (dtype) {
+double decode_voxel(const uint8_t* p, DType t) {
+  switch (t) {
     case DType::kU8: return *p;
     case DType::kI8: return static_cast<int8_t>(*p);
     case DType::kU16: { uint16_t v; std::memcpy(&v, p, 2); return v; }
@@ -54,6 +52,11 @@ double DenseVolume::value_at(uint32_t x, uint32_t y, uint32_t z) const {
     case DType::kF32: { float v; std::memcpy(&v, p, 4); return v; }
   }
   return 0.0;
+}
+
+double DenseVolume::value_at(uint32_t x, uint32_t y, uint32_t z) const {
+  const uint64_t i = (uint64_t(z) * dims[1] + y) * dims[0] + x;
+  return decode_voxel(data.data() + i * dtype_bytes(dtype), dtype);
 }
 
 Result<DenseVolume> load_raw_volume(const std::string& json_path) {

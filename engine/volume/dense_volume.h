@@ -28,22 +28,22 @@ struct DenseVolume {
   double value_at(uint32_t x, uint32_t y, uint32_t z) const;
 };
 
-// Reads a raw volume described by a JSON sidecar:
-//   {"file": "mri-stack.u8.raw", "dims": [186, 226, 27], "dtype": "u8",
-//    "voxel_size": [1, 1, 5], "unit": "um"}
-// "file" is relative to the sidecar. Sizes are checked against the file.
-// A voxel value as the renderers read it (GPU texture and CPU reference
-// alike): NaN reads as 0 and magnitudes are clamped to 1e30, so trilinear
-// filtering and windowing never meet inf - inf or 0 * inf.
 // Why a volume cannot be rendered (a zero side, a voxel size that is not a
 // positive finite number), or ok. Both renderers check it before anything else.
 Status check_renderable(const DenseVolume& v);
 
+// A voxel value as the renderers read it (GPU texture and CPU reference
+// alike): NaN reads as 0 and magnitudes are clamped to 1e30, so trilinear
+// filtering and windowing never meet inf - inf or 0 * inf.
 inline double renderable_value(double v) {
   if (v != v) return 0.0;
   return v > 1e30 ? 1e30 : (v < -1e30 ? -1e30 : v);
 }
 
+// Reads a raw volume described by a JSON sidecar:
+//   {"file": "mri-stack.u8.raw", "dims": [186, 226, 27], "dtype": "u8",
+//    "voxel_size": [1, 1, 5], "unit": "um"}
+// "file" is relative to the sidecar. Sizes are checked against the file.
 Result<DenseVolume> load_raw_volume(const std::string& json_path);
 
 }  // namespace vxr

@@ -24,4 +24,7 @@ inline uint32_t dtype_bytes(DType t) {
 const char* dtype_name(DType t);
 std::optional<DType> dtype_from_name(std::string_view name);
 
+// The voxel at `p` (native byte order, any alignment) as a double in its own units.
+double decode_voxel(const uint8_t* p, DType t);
+
 }  // namespace vxr

@@ -1,25 +1,8 @@
 #include "xr/desktop/viewer_setup.h"
 
 #include <cmath>
-#include <cstring>
 
 namespace vxr::xr {
-namespace {
-
-double voxel_value(const uint8_t* p, DType t) {
-  switch (t) {
-    case DType::kU8: return *p;
-    case DType::kI8: return int8_t(*p);
-    case DType::kU16: { uint16_t v; std::memcpy(&v, p, 2); return v; }
-    case DType::kI16: { int16_t v; std::memcpy(&v, p, 2); return v; }
-    case DType::kU32: { uint32_t v; std::memcpy(&v, p, 4); return v; }
-    case DType::kI32: { int32_t v; std::memcpy(&v, p, 4); return v; }
-    case DType::kF32: { float v; std::memcpy(&v, p, 4); return v; }
-  }
-  return 0.0;
-}
-
-}  // namespace
 
 Result<std::vector<float>> coarse_histogram(const ChunkSource& source, uint32_t channel, uint32_t timepoint,
                                             std::array<double, 2> range, size_t bins, uint32_t max_chunks) {
@@ -51,7 +34,7 @@ Result<std::vector<float>> coarse_histogram(const ChunkSource& source, uint32_t 
           for (uint64_t y = 0; y < n[1]; ++y)
             for (uint64_t x = 0; x < n[0]; ++x) {
               const size_t at = ((z + apron) * edge + (y + apron)) * edge + (x + apron);
-              const double v = voxel_value(&chunk->data[at * bytes], chunk->dtype);
+              const double v = decode_voxel(&chunk->data[at * bytes], chunk->dtype);
               if (!std::isfinite(v)) continue;
               const double b = std::floor((v - range[0]) * scale);
               counts[size_t(std::clamp(b, 0.0, double(bins - 1)))] += 1.0;
