@@ -49,6 +49,8 @@ struct Options {
   SessionFlags flags;  // shared with vxr render; its timepoint is shown first (the desktop viewer plays from it)
   std::string card;    // STORE:ID or ID
   bool lod_bias_given = false;
+  std::string tool = "count", tool_class = "cell";  // the hands' starting tool and count class
+  bool tool_given = false;
 };
 
 // The value range the window/level sliders span: the dtype's, or around the
@@ -187,6 +189,11 @@ int run(const Options& given) {
     return fail(session.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage
                                                                                                   : kExitFailure);
   }
+  if (o.tool_given && session->annotation_store.empty())
+    return fail(invalid_argument("--tool/--class: the tools edit an annotation store; give --annotations STORE or a "
+                                 "project"),
+                kExitUsage);
+  if (o.tool_class.empty()) return fail(invalid_argument("--class: give a class name"), kExitUsage);
   for (const std::string& n : session->notes)
     std::fprintf(stderr, "vxr view: %s: %s\n", o.input.c_str(), n.c_str());
   if (const VolumeInfo& info = session->source->info(); info.channels > 1 || info.timepoints > 1) {
@@ -276,11 +283,25 @@ int run(const Options& given) {
   vo.frame.lod.timepoint = session->timepoint;
   vo.frame_budget_ms = o.frame_budget_ms;
   // The desktop viewer holds the store open itself (its tools edit it) and draws its markers over the volume.
-  const bool viewer_has_store = req.viewer && req.viewer->store;
+  const bool viewer_has_store = choice->kind == xr::TargetKind::kDesktop && req.viewer && req.viewer->store;
+  if (viewer_has_store && o.tool_given)
+    std::fprintf(stderr, "vxr view: note: --tool/--class set the controllers' tools; the window's tools panel picks "
+                         "its own\n");
+  // Otherwise the session holds it (the one opened for a window not chosen, one LevelDB lock):
+  // the hands' tools edit it and it is drawn from there.
   if (!session->annotation_store.empty() && !viewer_has_store) {
-    auto annotations = load_annotation_scene(session->annotation_store, placement, vo.frame.lod.timepoint);
-    if (!annotations) return fail(annotations.status());
-    vo.annotations = std::move(annotations).value();
+    vo.tool_store = req.viewer ? req.viewer->store : nullptr;
+    if (!vo.tool_store) {
+      auto store = annotate::AnnotationStore::open(session->annotation_store, false);
+      if (!store) return fail(store.status());
+      vo.tool_store = std::move(store).value();
+    }
+    vo.hand_tools.tool = *annotate::tool_from_name(o.tool);  // checked by the flag
+    vo.hand_tools.count_class = o.tool_class;
+    vo.on_tool_report = [](const std::string& line) {
+      std::printf("vxr view: %s\n", line.c_str());
+      std::fflush(stdout);
+    };
   }
   auto stats = xr::run_view(choice->factory, session->source, vo, start);
   if (!stats) return fail(stats.status());
@@ -343,6 +364,9 @@ void add_view_command(CLI::App& app, Invocation& inv) {
                   "desktop: run this scripted session (JSON list of steps: viewer commands, play/pause, screenshot "
                   "PATH, count, measure, tool, click, card; see xr/desktop/ui_script.h), then close");
   add_annotations_option(cmd, o->flags.annotations);
+  cmd->add_option("--tool", o->tool, "the right trigger's starting tool (headset, pose script; the menu button cycles)")
+      ->check(CLI::IsMember({"count", "measure", "trace", "track", "roi"}));
+  cmd->add_option("--class", o->tool_class, "the class count markers get (default cell)");
   cmd->add_option("--card", o->card,
                   "STORE:ID (or ID of the --annotations store or the input project's): restore a card's volume, "
                   "settings, channels, timepoint and annotations; headless, its exact camera and size too");
@@ -350,6 +374,7 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->callback([&inv, o, cmd] {
     o->lod_bias_given = cmd->count("--lod-bias") > 0;
     note_session_flags(cmd, &o->flags);
+    o->tool_given = cmd->count("--tool") + cmd->count("--class") > 0;
     inv.run = [o] { return run(*o); };
   });
 }

@@ -37,8 +37,8 @@ Result<std::unique_ptr<EyeRenderer>> EyeRenderer::create(gpu::Context& ctx, std:
   return r;
 }
 
-Status EyeRenderer::set_annotations(AnnotationScene scene) {
-  if (!scene.empty() && !annotation_renderer_) {
+Status EyeRenderer::set_annotations(AnnotationScene scene, bool make_pass) {
+  if ((make_pass || !scene.empty()) && !annotation_renderer_) {
     VXR_ASSIGN_OR_RETURN(annotation_renderer_, AnnotationRenderer::create(ctx_));
   }
   annotations_ = std::move(scene);

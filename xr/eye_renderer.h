@@ -35,8 +35,9 @@ class EyeRenderer {
 
   // Annotations drawn with every view from now on (world units, the volume
   // centred at the origin: AnnotationScene). Each view records their pass
-  // first, into the same command buffer; rays end at their depth. Empty: none.
-  Status set_annotations(AnnotationScene scene);
+  // first, into the same command buffer; rays end at their depth. Empty: none
+  // (`make_pass` builds the pass anyway: scenes that come later add no pipeline).
+  Status set_annotations(AnnotationScene scene, bool make_pass = false);
 
   Status begin_frame(VkCommandBuffer cmd, const BrickFrameSettings& frame) {
     return renderer_->begin_frame(cmd, frame);

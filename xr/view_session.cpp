@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "core/log.h"
 #include "core/trace.h"
@@ -67,9 +68,47 @@ struct FrameCommands {
   }
 };
 
+// The hands' tools over the store the session holds, and the scene drawn from it.
+struct SessionTools {
+  HandTools& hands;
+  const ViewOptions& options;
+  uint64_t drawn_revision = UINT64_MAX;  // of the store scene below (per run: the eyes are new)
+  uint32_t drawn_timepoint = 0;
+  annotate::Tool drawn_tool = annotate::Tool::kCount;
+  AnnotationScene stored;
+
+  void report(const std::string& line) const {
+    if (options.on_tool_report) options.on_tool_report(line);
+    else log_info("view: " + line);
+  }
+  // Applies this frame's input; the eyes get the store's scene (re-read after
+  // an edit) and what is live over it.
+  Status frame(const FrameState& f, const VolumeTransform& t, uint32_t timepoint, FrameTarget& target,
+               EyeRenderer& eyes) {
+    const HandToolFrame r = hands.update(f.input, t, timepoint);
+    if (r.stored) target.haptic_pulse(r.hand, 0.3, 0.01);
+    if (!r.error.empty()) report(std::string("tool ") + annotate::tool_name(hands.tool()) + ": " + r.error);
+    if (r.stored || r.tool_changed) report(hands.report());
+    if (hands.tools().revision() != drawn_revision || timepoint != drawn_timepoint || hands.tool() != drawn_tool) {
+      // A store unreadable from the start ends the run; later, the last picture stays and says why.
+      auto scene = hands.stored_scene(timepoint);
+      if (!scene && drawn_revision == UINT64_MAX) return scene.status();
+      if (scene) stored = std::move(scene).value();
+      else log_warn("view: " + hands.tools().store().path() + ": " + scene.status().message());
+      drawn_revision = hands.tools().revision();
+      drawn_timepoint = timepoint;
+      drawn_tool = hands.tool();
+    }
+    AnnotationScene scene = stored;
+    hands.add_live(f.input, t, scene);
+    return eyes.set_annotations(std::move(scene), /*make_pass=*/true);
+  }
+};
+
 // One run of a target: returns kRestart when the target lost its session.
 Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkSource>& source,
-                         const ViewOptions& options, GrabInteraction& grab, FrameBudget& budget, ViewStats& stats) {
+                         const ViewOptions& options, GrabInteraction& grab, FrameBudget& budget, HandTools* hands,
+                         ViewStats& stats) {
   gpu::ContextOptions copts = gpu::ContextOptions::from_env();
   VXR_RETURN_IF_ERROR(target.prepare_context(copts));
   VXR_ASSIGN_OR_RETURN(std::unique_ptr<gpu::Context> ctx, gpu::Context::create(copts));
@@ -91,7 +130,13 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
   VXR_RETURN_IF_ERROR(target.attach(*ctx));
   target.use_chunk_cache(&cache, source.get());
   VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, source, &cache, options.channels));
-  VXR_RETURN_IF_ERROR(eyes->set_annotations(options.annotations));
+  std::optional<SessionTools> tools;
+  if (hands) {
+    tools.emplace(SessionTools{*hands, options});
+    VXR_RETURN_IF_ERROR(eyes->set_annotations({}, /*make_pass=*/true));
+  } else {
+    VXR_RETURN_IF_ERROR(eyes->set_annotations(options.annotations));
+  }
   // Pool changes the settings need (apron 2 for gradients) before any frame records.
   VXR_RETURN_IF_ERROR(eyes->renderer().prepare(options.settings));
   VXR_RETURN_IF_ERROR(commands.create(*ctx));
@@ -125,6 +170,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
     BrickFrameSettings fs = options.frame;
     if (options.frame_budget_ms > 0.0) fs.lod.lod_bias = budget.bias;
     if (frame->settings) fs.lod.timepoint = std::min(frame->timepoint, source->info().timepoints - 1);
+    if (tools) VXR_RETURN_IF_ERROR(tools->frame(*frame, stats.transform, fs.lod.timepoint, target, *eyes));
     if (frame->settings && !(*frame->settings == drawn_settings)) {
       // An edit the brick renderer cannot draw keeps the last picture and says why.
       Status ok = check_brick_settings(*frame->settings, eyes->renderer().channels());
@@ -237,13 +283,23 @@ Result<ViewStats> run_view(const TargetFactory& make_target, std::shared_ptr<con
   ViewStats stats;
   stats.transform = initial;
   GrabInteraction grab;
+  // Outside the restart loop: a recovered session keeps the tool and what it was drawing.
+  std::unique_ptr<ViewerTools> viewer_tools;
+  std::unique_ptr<HandTools> hands;
+  if (options.tool_store) {
+    const VolumeInfo& info = source->info();
+    const VolumePlacement placement{{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])},
+                                    info.voxel_size};
+    viewer_tools = std::make_unique<ViewerTools>(*options.tool_store);
+    hands = std::make_unique<HandTools>(*viewer_tools, placement, options.hand_tools);
+  }
   FrameBudget budget;
   budget.target_ms = options.frame_budget_ms;
   budget.bias = options.frame.lod.lod_bias;
   for (;;) {
     std::unique_ptr<FrameTarget> target;
     VXR_ASSIGN_OR_RETURN(target, make_target());
-    auto outcome = run_once(*target, source, options, grab, budget, stats);
+    auto outcome = run_once(*target, source, options, grab, budget, hands.get(), stats);
     if (!outcome) {
       if (!target->wants_restart()) return outcome.status();
       log_warn("XR: " + outcome.status().message());

@@ -31,6 +31,7 @@
 #include "render/lod/brick_renderer.h"
 #include "render/volume_session.h"
 #include "xr/frame_target.h"
+#include "xr/hand_tools.h"
 #include "xr/interaction.h"
 #include "xr/lens_warp.h"
 #include "xr/volume_transform.h"
@@ -51,6 +52,12 @@ struct ViewOptions {
   AnnotationScene annotations;
   // Called after each rendered frame (its command buffer has completed).
   std::function<void(uint64_t frame)> on_frame;
+  // The store the hands' tools edit (xr/hand_tools.h); the session holds it
+  // and draws it (then `annotations` is not used). Null: no hand tools.
+  std::shared_ptr<annotate::AnnotationStore> tool_store;
+  HandToolSettings hand_tools;
+  // Told one line when the tool changes or an edit is stored (null: log_info).
+  std::function<void(const std::string& line)> on_tool_report;
 };
 
 struct ViewStats {

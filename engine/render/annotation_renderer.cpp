@@ -77,7 +77,13 @@ Result<AnnotationScene> load_annotation_scene(const std::string& store_path, con
   VXR_TRACE_SCOPE("annotations.load");
   auto opened = annotate::AnnotationStore::open(store_path, /*create=*/false);
   if (!opened) return opened.status();  // names the store
-  const annotate::AnnotationStore& store = **opened;
+  return annotation_scene_of_store(**opened, placement, timepoint, marker_radius);
+}
+
+Result<AnnotationScene> annotation_scene_of_store(const annotate::AnnotationStore& store,
+                                                  const VolumePlacement& placement, uint32_t timepoint,
+                                                  double marker_radius) {
+  const std::string& store_path = store.path();
   VXR_ASSIGN_OR_RETURN(std::vector<annotate::Marker> markers, store.markers());
   VXR_ASSIGN_OR_RETURN(std::vector<annotate::SkeletonInfo> infos, store.skeletons());
   std::vector<annotate::Skeleton> skeletons;

@@ -35,6 +35,9 @@
 #include "render/volume_renderer.h"  // ViewUnderlay
 
 namespace vxr {
+namespace annotate {
+class AnnotationStore;
+}
 
 // World units (the volume centred at the origin, as Camera).
 struct AnnotationSphere {
@@ -80,6 +83,11 @@ AnnotationScene annotation_scene(std::span<const annotate::Marker> markers,
 // voxels). Errors name the store.
 Result<AnnotationScene> load_annotation_scene(const std::string& store_path, const VolumePlacement& placement,
                                               uint32_t timepoint, double marker_radius = 0.0);
+// The same from a store already open (the view's hand tools hold it: one
+// LevelDB lock per store).
+Result<AnnotationScene> annotation_scene_of_store(const annotate::AnnotationStore& store,
+                                                  const VolumePlacement& placement, uint32_t timepoint,
+                                                  double marker_radius = 0.0);
 
 struct AnnotationImage {
   ImageRgba8 color;               // premultiplied, top row first; transparent where nothing is

@@ -48,6 +48,25 @@ Status ViewerTools::measure_hover(const annotate::Vec3& voxel, uint32_t timepoin
   return palette_.apply({annotate::ToolAction::kMove, voxel, timepoint});
 }
 
+namespace {
+
+// Whether `action` of `tool` writes the store (when it succeeds).
+bool stores(annotate::Tool tool, annotate::ToolAction action) {
+  using annotate::Tool, annotate::ToolAction;
+  if (action == ToolAction::kRemove) return true;
+  if (tool == Tool::kMeasure || tool == Tool::kRoi) return action == ToolAction::kRelease;
+  return action == ToolAction::kPress;
+}
+
+}  // namespace
+
+Status ViewerTools::apply_event(annotate::Tool tool, const std::string& cls, const annotate::ToolEvent& event) {
+  if (tool == annotate::Tool::kCount || tool == annotate::Tool::kTrack) palette_.set_class(cls, class_colour(cls));
+  VXR_RETURN_IF_ERROR(apply(tool, event.action, event.cursor, event.timepoint));
+  if (stores(tool, event.action)) ++revision_;
+  return Status::ok();
+}
+
 void ViewerTools::cancel() {
   // Selecting a tool drops what the old one was drawing; nothing stored is lost.
   const annotate::Tool current = palette_.tool();

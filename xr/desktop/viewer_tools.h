@@ -30,6 +30,11 @@ class ViewerTools {
   Status measure_click(const annotate::Vec3& voxel, uint32_t timepoint);
   Status measure_hover(const annotate::Vec3& voxel, uint32_t timepoint);
   void cancel();  // drops a measurement being drawn
+  // Any tool's event (the headset's controllers, xr/hand_tools.h): the
+  // palette switches to `tool` first; count markers get `cls`.
+  Status apply_event(annotate::Tool tool, const std::string& cls, const annotate::ToolEvent& event);
+  // Switches the palette's tool, dropping what the old one was drawing.
+  void select_tool(annotate::Tool tool) { palette_.select_tool(tool); }
   // A card of `scene` with an optional PNG snapshot; returns its id.
   Result<annotate::Id> card(const Scene& scene, const std::string& title, const std::string& note,
                             std::vector<uint8_t> snapshot_png);
