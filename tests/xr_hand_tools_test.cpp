@@ -148,7 +148,7 @@ TEST_CASE("hand tools: the menu button cycles count, measure, trace, track, roi,
   CHECK(hands.report().rfind("tool roi", 0) == 0);
 }
 
-TEST_CASE("hand tools: the left trigger removes the marker nearest its tip; nothing near is refused") {
+TEST_CASE("hand tools: the left trigger removes the marker nearest its tip, nothing near is refused") {
   auto store = fresh_store(fs::path(VXR_TEST_OUT_DIR) / "hand_tools" / "remove");
   ViewerTools tools(*store);
   HandTools hands(tools, kPlacement);
@@ -179,7 +179,7 @@ TEST_CASE("hand tools: the left trigger removes the marker nearest its tip; noth
   CHECK(store->markers()->size() == 1);
 }
 
-TEST_CASE("hand tools: measuring previews while held and stores the length on release; lost tracking drops it") {
+TEST_CASE("hand tools: measuring previews while held and stores the length on release, lost tracking drops it") {
   auto store = fresh_store(fs::path(VXR_TEST_OUT_DIR) / "hand_tools" / "measure");
   REQUIRE(store->set_voxel_space({{0.5, 1.0, 2.0}, "mm"}).is_ok());
   ViewerTools tools(*store);
@@ -218,7 +218,7 @@ TEST_CASE("hand tools: measuring previews while held and stores the length on re
   CHECK(store->measurements()->size() == 1);
 }
 
-TEST_CASE("hand tools: tracing chains a node per press; roi drags a box while held, drawn live, stored on release") {
+TEST_CASE("hand tools: tracing chains a node per press, roi drags a box while held, drawn live, stored on release") {
   auto store = fresh_store(fs::path(VXR_TEST_OUT_DIR) / "hand_tools" / "trace_roi");
   ViewerTools tools(*store);
   HandToolSettings settings;
@@ -268,7 +268,7 @@ TEST_CASE("hand tools: tracing chains a node per press; roi drags a box while he
   CHECK((*rois)[0].max[2] == doctest::Approx(9.0));
 }
 
-TEST_CASE("hand tools: the trigger never grabs; the volume moves only on squeeze") {
+TEST_CASE("hand tools: the trigger never grabs, the volume moves only on squeeze") {
   xr::VolumeTransform t = plain();
   GrabInteraction grab;
   InputState in = right_at({0.0, 1.5, -0.5}, 1.0);

@@ -37,14 +37,9 @@ void add_compare_command(CLI::App& app, Invocation& inv) {
                                      o->b + " is " + std::to_string(b->width) + "x" + std::to_string(b->height) +
                                      "; compare images of the same size"),
                     kExitUsage);
-      int max_abs = 0;
-      double sq = 0.0;
-      for (size_t i = 0; i < a->pixels.size(); ++i) {
-        const int d = std::abs(int(a->pixels[i]) - int(b->pixels[i]));
-        max_abs = std::max(max_abs, d);
-        sq += double(d) * d;
-      }
-      const double rmse = std::sqrt(sq / a->pixels.size());
+      const PixelDifference diff = compare_pixels(a->pixels, b->pixels);
+      const int max_abs = diff.max_abs;
+      const double rmse = diff.rmse;
       if (!o->side_by_side.empty()) {
         const uint32_t w = a->width, h = a->height;
         ImageRgba8 out(3 * w, h);

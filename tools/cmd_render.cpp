@@ -338,19 +338,7 @@ int run(const Options& given) {
     if (glm::length(camera.target - camera.eye) == 0.0)
       return invalid_argument("--camera: the eye and the target are the same point");
     world_camera = camera;
-    // The renderers draw the volume at the origin: a moved, turned or scaled
-    // volume is drawn by moving the camera the opposite way.
-    if (!(scene.transform == VolumeTransform{})) {
-      const CameraState v = camera_in_volume_frame({{camera.eye.x, camera.eye.y, camera.eye.z},
-                                                    {camera.target.x, camera.target.y, camera.target.z},
-                                                    {camera.up.x, camera.up.y, camera.up.z},
-                                                    camera.fov_y_deg},
-                                                   scene.transform);
-      camera.eye = {v.eye[0], v.eye[1], v.eye[2]};
-      camera.target = {v.target[0], v.target[1], v.target[2]};
-      camera.up = {v.up[0], v.up[1], v.up[2]};
-    }
-    return camera;
+    return camera_in_volume_frame(camera, scene.transform);
   };
   auto finish = [&](int rc) {
     if (rc != kExitOk || o.save_card.empty()) return rc;

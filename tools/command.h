@@ -54,6 +54,9 @@ Result<Scene> load_card_scene(const std::string& spec, const std::string& annota
 // its own (or the default orbit view; `flat`: a single slice seen from
 // above), then its volume transform undone.
 Camera scene_camera(const Scene& scene, const VolumePlacement& placement, bool flat);
+// `world` (the volume placed by `transform`) as the renderers see it: the
+// volume at the origin and the camera moved the opposite way.
+Camera camera_in_volume_frame(const Camera& world, const VolumeTransform& transform);
 
 // Opens the Vulkan device (VXR_DEVICE, VXR_VALIDATION from the environment).
 Result<std::unique_ptr<gpu::Context>> open_gpu();

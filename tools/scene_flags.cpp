@@ -48,16 +48,20 @@ Camera scene_camera(const Scene& sc, const VolumePlacement& placement, bool flat
     camera.up = {sc.camera.up[0], sc.camera.up[1], sc.camera.up[2]};
     camera.fov_y_deg = sc.camera.fov_y_deg;
   }
-  if (!(sc.transform == VolumeTransform{})) {
-    const CameraState v = camera_in_volume_frame({{camera.eye.x, camera.eye.y, camera.eye.z},
-                                                  {camera.target.x, camera.target.y, camera.target.z},
-                                                  {camera.up.x, camera.up.y, camera.up.z},
-                                                  camera.fov_y_deg},
-                                                 sc.transform);
-    camera.eye = {v.eye[0], v.eye[1], v.eye[2]};
-    camera.target = {v.target[0], v.target[1], v.target[2]};
-    camera.up = {v.up[0], v.up[1], v.up[2]};
-  }
+  return camera_in_volume_frame(camera, sc.transform);
+}
+
+Camera camera_in_volume_frame(const Camera& world, const VolumeTransform& transform) {
+  if (transform == VolumeTransform{}) return world;
+  const CameraState v = vxr::camera_in_volume_frame({{world.eye.x, world.eye.y, world.eye.z},
+                                                     {world.target.x, world.target.y, world.target.z},
+                                                     {world.up.x, world.up.y, world.up.z},
+                                                     world.fov_y_deg},
+                                                    transform);
+  Camera camera = world;
+  camera.eye = {v.eye[0], v.eye[1], v.eye[2]};
+  camera.target = {v.target[0], v.target[1], v.target[2]};
+  camera.up = {v.up[0], v.up[1], v.up[2]};
   return camera;
 }
 

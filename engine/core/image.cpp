@@ -4,7 +4,10 @@
 
 #include <png.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 
 namespace vxr {
@@ -77,6 +80,20 @@ Result<ImageRgba8> read_png(const std::string& path) {
   png_destroy_read_struct(&png, &info, nullptr);
   if (!ok) return corrupt(path + ": PNG decode failed");
   return img;
+}
+
+PixelDifference compare_pixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+  PixelDifference out;
+  const size_t n = std::min(a.size(), b.size());
+  if (n == 0) return out;
+  double sq = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const int d = std::abs(int(a[i]) - int(b[i]));
+    out.max_abs = std::max(out.max_abs, d);
+    sq += double(d) * d;
+  }
+  out.rmse = std::sqrt(sq / double(n));
+  return out;
 }
 
 }  // namespace vxr

@@ -21,6 +21,14 @@ struct ImageRgba8 {
   const uint8_t* at(uint32_t x, uint32_t y) const { return &pixels[(size_t(y) * width + x) * 4]; }
 };
 
+// How two equally sized 8-bit pixel arrays differ, every byte (R, G, B, A)
+// counted, in 8-bit units: what `vxr compare` reports.
+struct PixelDifference {
+  int max_abs = 0;
+  double rmse = 0.0;
+};
+PixelDifference compare_pixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b);
+
 // Writes `path` atomically (temp file then rename): a failed write leaves no
 // file that looks like a finished PNG.
 Status write_png(const std::string& path, const ImageRgba8& image);

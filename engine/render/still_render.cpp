@@ -32,16 +32,6 @@ Result<std::vector<uint8_t>> reference_pixels(const VolumeSession& session, cons
   return over_black(to_rgba8(ref)).pixels;
 }
 
-// 8-bit units over black, all four channels: what `vxr compare` reports.
-double rmse(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
-  double sq = 0.0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    const double d = double(a[i]) - double(b[i]);
-    sq += d * d;
-  }
-  return std::sqrt(sq / double(a.size()));
-}
-
 }  // namespace
 
 Result<StillResult> render_still(gpu::Context& gpu, const VolumeSession& session, const Camera& camera,
@@ -96,7 +86,7 @@ Result<StillResult> render_still(gpu::Context& gpu, const VolumeSession& session
     f.bricks_drawn = out.last.lod.drawn;
     f.bricks_missing = out.last.lod.missing;
     f.bricks_uploaded = out.last.bricks_uploaded;
-    if (!reference.empty()) f.rmse_vs_reference = rmse(over_black(out.image).pixels, reference);
+    if (!reference.empty()) f.rmse_vs_reference = compare_pixels(over_black(out.image).pixels, reference).rmse;
     out.frames.push_back(f);
     out.bytes_uploaded += out.last.bytes_uploaded;
     out.bricks_uploaded += out.last.bricks_uploaded;

@@ -84,15 +84,6 @@ Result<Timed> measure(BrickRenderer& r, const Camera& cam, const RenderSettings&
   return t;
 }
 
-double rmse(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
-  double sq = 0.0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    const double d = double(a[i]) - double(b[i]);
-    sq += d * d;
-  }
-  return std::sqrt(sq / double(a.size()));
-}
-
 // The VTK-style transfer function: a linear opacity ramp over the window, grey.
 RenderSettings ramp(OpticalModel model, double lo, double hi, double unit_distance) {
   RenderSettings s;
@@ -168,7 +159,7 @@ int run(const Options& o) {
       if (!b) return fail(b.status());
       progress.advance(1);
       const bool identical = a->image.pixels == b->image.pixels;
-      const double err = rmse(over_black(a->image).pixels, ref_px);
+      const double err = compare_pixels(over_black(a->image).pixels, ref_px).rmse;
       const double speedup = b->wall_ms / a->wall_ms;
       if (err <= o.rmse_goal && (front_step == 0.0 || step > front_step)) {
         front_step = step;
