@@ -367,3 +367,26 @@ TEST_CASE("view --timepoint: the viewer opens at that timepoint, the same pictur
   CHECK(past.rc == 2);
   CHECK(past.err.find("--timepoint: 6, but " + movie.string() + " has 6 timepoint(s) (0..5)") != std::string::npos);
 }
+
+TEST_CASE("play headless: the session flags of render and view (--timepoint, --channel, --model) choose what plays") {
+  const std::string tif = std::string(VXR_TESTDATA_DIR) + "/ome-tiff/multi-channel-time-series.ome.tif";
+  const auto from3 = play(tif, "flags_from3", "--fps 4 --timepoint 3 --channel 1 --model mip");
+  const auto loops = loops_of(from3);
+  REQUIRE(loops.size() == 1);
+  REQUIRE(!loops[0].empty());
+  CHECK(loops[0].front() == 3);
+  CHECK(loops[0].back() == 6);
+  CHECK(from3["dropped"].get<uint64_t>() + loops[0].size() == 4);
+
+  const std::filesystem::path dir = vxr::test::scratch_dir("playback", "flags_bad");
+  const auto bad = vxr::test::run_vxr("play " + vxr::test::shell_quote(tif) + " --headless --out " +
+                                          vxr::test::shell_quote(dir.string()) + " --channel 5",
+                                      dir, 300);
+  CHECK(bad.rc == 2);
+  CHECK(bad.err.find("--channel: '5', but " + tif + " has 3 channel(s)") != std::string::npos);
+  const auto late = vxr::test::run_vxr("play " + vxr::test::shell_quote(tif) + " --headless --out " +
+                                           vxr::test::shell_quote(dir.string()) + " --timepoint 7",
+                                       dir, 300);
+  CHECK(late.rc == 2);
+  CHECK(late.err.find("--timepoint: 7, but " + tif + " has 7 timepoint(s) (0..6)") != std::string::npos);
+}

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "command.h"
+#include "volume_flags.h"
 #include "core/image.h"
 #include "core/output_file.h"
 #include "render/camera.h"
@@ -29,10 +30,9 @@ struct PlayOptions {
   int frames = 0;             // display frames (stalls included); 0: until the end (looping: one loop and a bit)
   double frame_delay_ms = 0;  // extra time per frame: a forced slow renderer
   uint32_t size = 256;
-  uint32_t start = 0;         // first timepoint
   uint32_t prefetch = 4;      // timepoints decoded ahead
   int level = -1;             // pyramid level played (-1: the finest that fits the prefetch budget)
-  SessionFlags session;
+  SessionFlags session;  // shared with render and view; its timepoint is the first one played
 };
 
 int run_play(const PlayOptions& o) {
@@ -40,27 +40,25 @@ int run_play(const PlayOptions& o) {
   std::error_code dir_error;
   std::filesystem::create_directories(o.out_dir, dir_error);  // --out names a folder: made if missing
   if (Status s = check_output((std::filesystem::path(o.out_dir) / "play.json").string(), {}); !s) return fail(s, kExitUsage);
-  auto session = open_volume_session(o.input, o.session);
-  if (!session) return fail(session.status());
+  SessionStep failed_at = SessionStep::kSettings;
+  auto session = open_volume_session(o.input, o.session, &failed_at);
+  if (!session) return fail(session.status(), failed_at == SessionStep::kSource ? kExitFailure : kExitUsage);
   const ChunkSource& src = *session->source;
   const uint32_t T = src.info().timepoints;
-  if (o.start >= T)
-    return fail(invalid_argument("--timepoint: " + std::to_string(o.start) + ", but " + o.input + " has " +
-                                 std::to_string(T) + " timepoint(s)"),
-                kExitUsage);
   auto gpu = open_gpu();
   if (!gpu) return fail(gpu.status());
   MoviePlayerOptions mo;
   mo.playback = {.fps = o.fps, .speed = o.speed, .loop = o.loop};
   mo.prefetch = o.prefetch;
   mo.level = o.level;
+  mo.pool.channels = session->channels;
   auto player = MoviePlayer::create(**gpu, session->source, mo);
   if (!player) return fail(player.status());
   MoviePlayer& p = **player;
   PlaybackClock& clock = p.clock();
   const Camera camera = orbit_camera(p.renderer().placement(), 30.0, 20.0);
 
-  clock.step(int(o.start), 0.0);
+  clock.step(int(session->timepoint), 0.0);
   const auto t0 = std::chrono::steady_clock::now();
   auto now = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   clock.play(now());
@@ -110,7 +108,6 @@ void add_play_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--fps", o->fps, "timepoints per second")->check(CLI::Range(0.01, 1000.0));
   cmd->add_option("--speed", o->speed, "speed multiplier")->check(CLI::Range(0.01, 100.0));
   cmd->add_flag("--loop", o->loop, "start over after the last timepoint");
-  cmd->add_option("--timepoint", o->start, "first timepoint");
   cmd->add_flag("--headless", o->headless, "no window: render offscreen, log the shown timepoints");
   cmd->add_option("--out", o->out_dir, "headless: directory for play.json and last.png")->default_val("out/play");
   cmd->add_option("--frames", o->frames, "stop after this many display frames (default: the end; looping: one loop and a half)");
@@ -119,9 +116,11 @@ void add_play_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--level", o->level, "pyramid level to play (default: the finest whose timepoint fits the prefetch budget)")
       ->check(CLI::Range(0, 64));
   cmd->add_option("--size", o->size, "headless image side, pixels")->check(CLI::Range(16u, 4096u));
-  cmd->add_option("--colormap", o->session.colormap, "colormap name");
-  cmd->add_option("--window", o->session.window, "LO,HI in data units");
-  cmd->callback([&inv, o] { inv.run = [o] { return run_play(*o); }; });
+  add_session_flags(cmd, &o->session);
+  cmd->callback([&inv, o, cmd] {
+    note_session_flags(cmd, &o->session);
+    inv.run = [o] { return run_play(*o); };
+  });
 }
 
 }  // namespace vxr::cli
