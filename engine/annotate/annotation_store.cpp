@@ -142,8 +142,9 @@ std::string encode_mesh_data(const std::vector<Vec3>& positions, const std::vect
   std::string out(8 + positions.size() * 24 + tris.size() * 12, '\0');
   const uint32_t counts[2] = {uint32_t(positions.size()), uint32_t(tris.size())};
   std::memcpy(out.data(), counts, 8);
-  std::memcpy(out.data() + 8, positions.data(), positions.size() * 24);
-  std::memcpy(out.data() + 8 + positions.size() * 24, tris.data(), tris.size() * 12);
+  // An empty part (no vertices) has null data(): memcpy must not see it.
+  if (!positions.empty()) std::memcpy(out.data() + 8, positions.data(), positions.size() * 24);
+  if (!tris.empty()) std::memcpy(out.data() + 8 + positions.size() * 24, tris.data(), tris.size() * 12);
   return out;
 }
 
@@ -701,8 +702,8 @@ Result<Mesh> AnnotationStore::mesh_geometry(Id id) const {
   Mesh m;
   m.positions.resize(counts[0]);
   m.triangles.resize(counts[1]);
-  std::memcpy(m.positions.data(), data->data() + 8, size_t(counts[0]) * 24);
-  std::memcpy(m.triangles.data(), data->data() + 8 + size_t(counts[0]) * 24, size_t(counts[1]) * 12);
+  if (counts[0] > 0) std::memcpy(m.positions.data(), data->data() + 8, size_t(counts[0]) * 24);
+  if (counts[1] > 0) std::memcpy(m.triangles.data(), data->data() + 8 + size_t(counts[0]) * 24, size_t(counts[1]) * 12);
   for (const auto& t : m.triangles)
     for (uint32_t v : t)
       if (v >= counts[0]) return corrupt(damaged + "a triangle refers to a missing vertex; the store is damaged");
