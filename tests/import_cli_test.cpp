@@ -81,7 +81,9 @@ TEST_CASE("cli import: every testdata file imports and vxr info --json reports i
   int i = 0;
   for (const Expect& e : kAll) {
     CAPTURE(e.input);
-    const fs::path out = dir / ("f" + std::to_string(i++) + ".vxc");
+    char name[32];
+    std::snprintf(name, sizeof name, "f%d.vxc", i++);
+    const fs::path out = dir / name;
     const Run imp = run_vxr("import " + quote(kData + "/" + e.input) + " -o " + quote(out.string()) + " --chunk 32", dir);
     REQUIRE_MESSAGE(imp.rc == 0, imp.err);
     const Run info = run_vxr("info --json " + quote(out.string()), dir);
@@ -97,6 +99,41 @@ TEST_CASE("cli import: every testdata file imports and vxr info --json reports i
     CHECK(j["voxel_size"][2].get<double>() == doctest::Approx(e.vz).epsilon(0.001));
     CHECK(j["unit"] == e.unit);
   }
+}
+
+TEST_CASE("cli info: an importable file is described as it is, without importing, with the figures import gives") {
+  const fs::path dir = scratch("info_importable");
+  for (const Expect& e : kAll) {
+    CAPTURE(e.input);
+    const Run info = run_vxr("info --json " + quote(kData + "/" + e.input), dir);
+    REQUIRE_MESSAGE(info.rc == 0, info.err);
+    const nlohmann::json j = nlohmann::json::parse(info.out, nullptr, false);
+    REQUIRE_FALSE(j.is_discarded());
+    CHECK(j["container"] == false);
+    CHECK_FALSE(j["format"].get<std::string>().empty());
+    CHECK(j["dims"] == nlohmann::json({e.x, e.y, e.z}));
+    CHECK(j["dtype"] == e.dtype);
+    CHECK(j["channels"] == e.channels);
+    CHECK(j["timepoints"] == e.timepoints);
+    CHECK(j["voxel_size"][2].get<double>() == doctest::Approx(e.vz).epsilon(0.001));
+    CHECK(j["unit"] == e.unit);
+  }
+  for (const auto& f : fs::directory_iterator(dir)) CHECK(f.path().filename() == "stderr.txt");  // nothing written
+
+  // A container under another name is still read as a container; a file that is neither fails naming it.
+  const fs::path vxc = dir / "mri.vxc", renamed = dir / "mri.data";
+  REQUIRE(run_vxr("import " + quote(kData + "/slices/mri-stack") + " -o " + quote(vxc.string()) + " --chunk 32", dir).rc == 0);
+  fs::copy_file(vxc, renamed);
+  const Run as_container = run_vxr("info --json " + quote(renamed.string()), dir);
+  REQUIRE_MESSAGE(as_container.rc == 0, as_container.err);
+  const nlohmann::json j = nlohmann::json::parse(as_container.out, nullptr, false);
+  CHECK(j.contains("chunks"));
+  CHECK(j["dims"] == nlohmann::json({186, 226, 27}));
+  std::ofstream(dir / "notes.txt") << "not an image\n";
+  const Run bad = run_vxr("info " + quote((dir / "notes.txt").string()), dir);
+  CHECK(bad.rc != 0);
+  CHECK(bad.err.find("notes.txt") != std::string::npos);
+  CHECK(std::count(bad.err.begin(), bad.err.end(), '\n') == 1);
 }
 
 TEST_CASE("cli import: bad input exits non-zero with one line naming the file, and leaves nothing vxr info accepts") {

@@ -1,9 +1,11 @@
-// `vxr info`: what a .vxc container or an OME-Zarr image holds.
+// `vxr info`: what a .vxc container, an OME-Zarr image or any importable file holds.
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "command.h"
 #include "volume/container_reader.h"
+#include "volume/importers/import_source.h"
+#include "volume/open_chunk_source.h"
 #include "volume/zarr/zarr_chunk_source.h"
 
 namespace vxr::cli {
@@ -76,17 +78,43 @@ int describe_zarr(const std::string& path, bool as_json) {
   return kExitOk;
 }
 
+// A file `vxr import` reads (TIFF, OME-TIFF, Imaris, a slice folder, raw + sidecar): what the importer sees,
+// without importing it.
+int describe_importable(const std::string& path, bool as_json) {
+  auto src = open_import_source({path});
+  if (!src) return fail(src.status());
+  const SlabSource& s = **src;
+  const VolumeInfo& i = s.info();
+  if (as_json) {
+    nlohmann::json j = volume_info_json(i);
+    j["format"] = s.format_name();
+    j["files"] = s.files().size();
+    j["warnings"] = s.warnings();
+    j["container"] = false;
+    print_json(j);
+    return kExitOk;
+  }
+  std::printf("file:        %s (%s)\n", path.c_str(), s.format_name().c_str());
+  print_volume_info_text(i);
+  if (s.files().size() > 1) std::printf("files:       %zu\n", s.files().size());
+  for (const std::string& w : s.warnings()) std::printf("note:        %s\n", w.c_str());
+  std::printf("note:        not a container: `vxr view`/`vxr render` read it as it is; `vxr import %s -o OUT.vxc`"
+              " makes an out-of-core container\n", path.c_str());
+  return kExitOk;
+}
+
 }  // namespace
 
 void add_info_command(CLI::App& app, Invocation& inv) {
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
-  auto* cmd = app.add_subcommand("info", "describe a .vxc container or OME-Zarr image (dims, dtype, channels, levels, chunks)");
-  cmd->add_option("file", *path, ".vxc file or OME-Zarr folder")->required();
+  auto* cmd = app.add_subcommand("info", "describe a .vxc container, an OME-Zarr image or any importable file (dims, dtype, channels, levels, chunks)");
+  cmd->add_option("file", *path, ".vxc file, OME-Zarr folder, or a file/folder `vxr import` reads")->required();
   cmd->add_flag("--json", *json, "print JSON");
   cmd->callback([&inv, path, json] {
     inv.run = [path, json] {
       if (zarr::looks_like_zarr(*path)) return describe_zarr(*path, *json);
+      if (!is_chunk_source_input(*path)) return describe_importable(*path, *json);
       auto reader = ContainerReader::open(*path);
       if (!reader) return fail(reader.status());
       const ContainerReader& r = **reader;

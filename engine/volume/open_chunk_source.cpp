@@ -1,14 +1,28 @@
 #include "volume/open_chunk_source.h"
 
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 
+#include "volume/container_format.h"
 #include "volume/container_reader.h"
 #include "volume/zarr/zarr_chunk_source.h"
 
 namespace vxr {
 
+namespace {
+// A container renamed to another extension still starts with the file magic.
+bool starts_with_container_magic(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[sizeof vxc::kFileMagic] = {};
+  return in.read(magic, sizeof magic) && std::memcmp(magic, vxc::kFileMagic, sizeof magic) == 0;
+}
+}  // namespace
+
 bool is_chunk_source_input(const std::string& path) {
-  return std::filesystem::path(path).extension() == ".vxc" || zarr::looks_like_zarr(path);
+  std::error_code ec;
+  return std::filesystem::path(path).extension() == ".vxc" || zarr::looks_like_zarr(path) ||
+         (std::filesystem::is_regular_file(path, ec) && starts_with_container_magic(path));
 }
 
 Result<OpenedChunkSource> open_chunk_source(const std::string& path) {

@@ -12,7 +12,7 @@
 
 namespace vxr {
 
-// True for a path ending in .vxc, or a folder (or zarr.json/.zattrs file) with Zarr metadata.
+// True for a path ending in .vxc or starting with the .vxc magic, or a folder (or zarr.json/.zattrs file) with Zarr metadata.
 bool is_chunk_source_input(const std::string& path);
 
 struct OpenedChunkSource {
