@@ -2,9 +2,11 @@
 // Brick ray caster: each ray marches a front-to-back list of bricks from the
 // LOD traversal, restarting in each brick's local voxel coordinates at its
 // entry. Samples sit on a per-level grid anchored at the eye,
-// t_i = (i + 0.5) * dt, so bricks of one level continue each other exactly
+// t_i = (i + o) * dt, so bricks of one level continue each other exactly
 // and one brick covering the whole volume (the monolithic path) gives the same
-// samples as its pieces. One dispatch can march all bricks (single pass), or
+// samples as its pieces. o is the settings' sample offset (0.5: midpoints) or,
+// with jitter, the core's per-pixel hash: one value per ray, so a jittered ray
+// still continues across brick seams. One dispatch can march all bricks (single pass), or
 // a wave of (brick, 8x8 tile) work items whose bricks do not overlap on
 // screen, continuing from the accumulation image (the paper's multipass,
 // batched); see engine/render/lod/brick_renderer.h.
@@ -243,6 +245,9 @@ void main() {
   // A view depth z lies at t = z * |raw_dir| (raw_dir has unit view depth), as in vxr_cast.
   if (underlay) g_t_limit = imageLoad(under_depth, full_pix).r * length(raw_dir);
 
+  // Where samples sit in their step (P.march.w < 0: jitter), as in vxr_cast.
+  const float offset = P.march.w < 0.0 ? vxr_jitter(uvec2(full_pix)) : P.march.w;
+
   float t0, t1;
   // A work item's pixel that misses its brick leaves the accumulation alone.
   if (item_mode && !segment(first, dir, t0, t1)) return;
@@ -265,8 +270,8 @@ void main() {
     g_atlas_origin = bricks[b].atlas.xyz;
     const vec3 dl = dir * bricks[b].scale.xyz;
     const float dt = P.march.x / length(dl);  // one local step, in t units
-    const float i0 = ceil(t0 / dt - 0.5);
-    const int n = int(ceil(t1 / dt - 0.5) - i0);
+    const float i0 = ceil(t0 / dt - offset);
+    const int n = int(ceil(t1 / dt - offset) - i0);
     // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture).
     const bool cells = p.pass.y != 0u && bricks[b].atlas.w >= 0.0;
     const uint slot = cells ? uint(bricks[b].atlas.w) : 0u;
@@ -274,14 +279,14 @@ void main() {
     float occupied_until = -1.0;
     for (int k = 0; k < n && !ray.done; ++k) {
       // From the index: no drift. The segment is dt level-0 voxels long.
-      const float t = (i0 + float(k) + 0.5) * dt;
+      const float t = (i0 + float(k) + offset) * dt;
       if (cells && t >= occupied_until) {
         const ivec3 c3 = clamp(ivec3(floor((e + t * dl) / p.atlas_inv.w)), ivec3(0), ivec3(int(p.pass.y) - 1));
         const int cell = (c3.z * int(p.pass.y) + c3.y) * int(p.pass.y) + c3.x;
         if (cell_is_empty(slot, cell, ray)) {
           // The first sample at or past the exit of the cell grown by a quarter
           // voxel; the ones before it lie within the half voxel its range covers.
-          const int next = int(ceil(cell_exit(c3, e, dl, 0.25) / dt - 0.5 - i0));
+          const int next = int(ceil(cell_exit(c3, e, dl, 0.25) / dt - offset - i0));
           k = max(k, next - 1);
           continue;
         }

@@ -12,6 +12,18 @@
 namespace vxr {
 namespace {
 
+// The shader's per-pixel jitter (raycast_core.glsl vxr_jitter), bit for bit:
+// an integer hash, its top 24 bits as a fraction in [0, 1).
+double pixel_jitter(uint32_t x, uint32_t y) {
+  uint32_t h = (x * 0x8da6b343u) ^ (y * 0xd8163841u);
+  h ^= h >> 16;
+  h *= 0x7feb352du;
+  h ^= h >> 15;
+  h *= 0x846ca68bu;
+  h ^= h >> 16;
+  return double(h >> 8) * (1.0 / 16777216.0);
+}
+
 using glm::dvec3;
 using glm::dvec4;
 
@@ -226,8 +238,9 @@ class Tracer {
     r.density = ray_density(s_, dir);
     if (s_.model == OpticalModel::kMinIp) r.reduce = dvec4(1.0);
     if (opt_.grid_from_eye) {
-      const double i0 = std::ceil(t0 / step_ - 0.5), i1 = std::ceil(t1 / step_ - 0.5);
-      for (double i = i0; i < i1 && !r.done; ++i) step(r, eye, dir, (i + 0.5) * step_, step_);
+      const double o = s_.jitter ? pixel_jitter(px, py) : s_.sample_offset;
+      const double i0 = std::ceil(t0 / step_ - o), i1 = std::ceil(t1 / step_ - o);
+      for (double i = i0; i < i1 && !r.done; ++i) step(r, eye, dir, (i + o) * step_, step_);
       return finish(r, eye, dir);
     }
     const double len = t1 - t0;

@@ -24,9 +24,10 @@ struct ReferenceOptions {
   glm::dvec3 clip_lo{-1e300}, clip_hi{1e300};
   glm::dvec4 plane{0.0};
   // false: samples at segment midpoints from where the ray enters the box (the
-  // dense ray caster's grid). true: sample i at (i + 0.5) * step from the eye,
-  // each for a whole step: the out-of-core renderer's grid, which every brick
-  // shares, so a comparison at the same step takes the same samples.
+  // dense ray caster's grid). true: sample i at (i + o) * step from the eye,
+  // each for a whole step, o the settings' sample_offset or, with jitter, the
+  // shader's per-pixel hash: the out-of-core renderer's grid, which every
+  // brick shares, so a comparison at the same step takes the same samples.
   bool grid_from_eye = false;
 };
 

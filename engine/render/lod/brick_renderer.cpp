@@ -110,14 +110,7 @@ std::string format_stats(const BrickFrameStats& s) {
 }
 
 Status check_brick_settings(const RenderSettings& s, uint32_t channels) {
-  auto no = [](const std::string& what) {
-    return invalid_argument("render settings: " + what +
-                            " is not drawn by the out-of-core renderer (its samples sit at segment midpoints on a "
-                            "grid every brick shares); use the dense renderer (vxr render --renderer dense)");
-  };
   if (s.channels.empty()) return invalid_argument("render settings: no channel settings");
-  if (s.jitter) return no("'jitter'");
-  if (s.sample_offset != 0.5) return no("'sample_offset' " + std::to_string(s.sample_offset));
   return validate_render_settings(s, channels);
 }
 

@@ -84,10 +84,10 @@ struct BrickRendererOptions {
 // The brick shader classifies and composites with the dense ray caster's
 // core (raycast_core.glsl): every optical model (ea, emission, mip, minip,
 // average, iso), 1-4 channels (additive or composite), any transfer function,
-// gradient opacity, depth colour, samples at segment midpoints. What it cannot
-// do (jitter, another sample offset: the brick grid is anchored at segment
-// midpoints so bricks continue each other) is refused, kInvalidArgument naming
-// the setting. `channels`: how many channels the renderer draws.
+// gradient opacity, depth colour, any sample offset and per-pixel jitter (on
+// a step grid anchored at the eye, so bricks continue each other). Settings
+// no renderer draws are refused, kInvalidArgument naming the setting.
+// `channels`: how many channels the renderer draws.
 Status check_brick_settings(const RenderSettings& s, uint32_t channels = 1);
 
 // Empty-space test for a brick whose payload values (data units, apron
