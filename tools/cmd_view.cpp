@@ -270,9 +270,9 @@ int run(const Options& given) {
   std::printf("vxr view: %s\n", choice->reason.c_str());
   std::fflush(stdout);
 
-  if (!o.card.empty() && choice->kind != xr::TargetKind::kHeadless)
+  if (!o.card.empty() && choice->kind == xr::TargetKind::kDesktop)
     std::fprintf(stderr, "vxr view: note: --card: settings, channels, timepoint and annotations restored; the card's "
-                         "camera is restored headless only (a headset or window keeps its own pose)\n");
+                         "camera is restored headless and in a headset only (a window keeps its own camera)\n");
 
   xr::ViewOptions vo;
   vo.frames = o.frames;
@@ -282,6 +282,9 @@ int run(const Options& given) {
   vo.frame.lod.lod_bias = o.lod_bias;
   vo.frame.lod.timepoint = session->timepoint;
   vo.frame_budget_ms = o.frame_budget_ms;
+  // A headset keeps its own head pose and fov: the volume is placed so the head
+  // sees what the card's camera saw (headless draws the camera itself).
+  if (pose && choice->kind == xr::TargetKind::kOpenXr) vo.place_for_camera = req.headless.camera;
   // The desktop viewer holds the store open itself (its tools edit it) and draws its markers over the volume.
   const bool viewer_has_store = choice->kind == xr::TargetKind::kDesktop && req.viewer && req.viewer->store;
   if (viewer_has_store && o.tool_given)

@@ -63,8 +63,18 @@ HandToolFrame HandTools::update(const InputState& input, const VolumeTransform& 
     } else if (tools_.revision() != before) {
       out.stored = true;
       out.hand = h;
+    } else if (action == ToolAction::kPick || action == ToolAction::kFinish) {
+      out.picked = true;
+      out.hand = h;
     }
   };
+  // The right hand's buttons, on the press only (a held button does not repeat).
+  const HandInput& right = input.hands[kRight];
+  const bool pick = right.tracked && right.primary, finish = right.tracked && right.secondary;
+  if (pick && !primary_down_) send(kRight, ToolAction::kPick, vec3(tip_voxel(right, t)));
+  if (finish && !secondary_down_) send(kRight, ToolAction::kFinish, vec3(tip_voxel(right, t)));
+  primary_down_ = pick;
+  secondary_down_ = finish;
   for (Hand h : {kRight, kLeft}) {
     const HandInput& hand = input.hands[h];
     const bool was = held_[h];
