@@ -175,7 +175,8 @@ TEST_CASE("teleport through the OpenXR test runtime: the right thumbstick click 
   const std::string dir = test::xr_out_dir("teleport");
   // The head at (0, 1.6, 0) looking along -z; the right hand at the head pointing along -z, straight
   // at the volume's centre (0, 1.6, -0.5); the click held from frame 12 to 16.
-  test::use_test_runtime(dir, R"({"view": {"width": 16, "height": 16},
+  // Frames 10 (before) and 14 (aiming) are dumped: the same pose, so they differ only by the marker.
+  test::use_test_runtime(dir, R"({"view": {"width": 48, "height": 48, "ipd_m": 0}, "dump_frames": [10, 14],
     "keys": [{"frame": 0, "head": {"position": [0, 1.6, 0], "orientation": [0, 0, 0, 1]},
                           "right": {"aim": {"position": [0, 1.6, 0]}, "thumbstick_click": false}},
              {"frame": 12, "right": {"thumbstick_click": true}},
@@ -201,6 +202,21 @@ TEST_CASE("teleport through the OpenXR test runtime: the right thumbstick click 
   REQUIRE(report.size() == 1);
   CHECK(report[0]["haptic_pulses"].get<int>() == 1);
   CHECK_MESSAGE(test::core_validation_messages(dir).empty(), test::core_validation_messages(dir));
+  // The aim's marker: the ray runs along the view axis, so it shows at the centre of the eye.
+  auto before = read_png(dir + "/dump/frame000010_left.png");
+  auto aiming = read_png(dir + "/dump/frame000014_left.png");
+  REQUIRE(before.is_ok());
+  REQUIRE(aiming.is_ok());
+  size_t near = 0, elsewhere = 0;
+  for (uint32_t y = 0; y < 48; ++y)
+    for (uint32_t x = 0; x < 48; ++x) {
+      const size_t i = (size_t(y) * 48 + x) * 4;
+      if (std::memcmp(&before->pixels[i], &aiming->pixels[i], 4) == 0) continue;
+      const double dx = x + 0.5 - 24.0, dy = y + 0.5 - 24.0;
+      (dx * dx + dy * dy < 4.0 * 4.0 ? near : elsewhere) += 1;
+    }
+  CHECK(near > 0);
+  CHECK(elsewhere == 0);
 }
 
 TEST_CASE("card in a headset: vxr view --card --xr shows the card's picture in the first frame's eye") {
@@ -225,7 +241,7 @@ TEST_CASE("card in a headset: vxr view --card --xr shows the card's picture in t
   REQUIRE_MESSAGE(r.rc == 0, r.err);
   // The headset: its eyes 64x64 with the card's fov (+-20 degrees), no eye separation, so an eye
   // is the head; the head somewhere else, turned. UNORM swapchains: the dump holds the renderer's bytes.
-  const std::string xr_dir = test::xr_out_dir("card_in_headset");
+  const std::string xr_dir = test::xr_out_dir("card_in_headset_runtime");
   std::string frames;
   for (int f = 0; f < 12; ++f) frames += (f ? "," : "") + std::to_string(f);
   test::use_test_runtime(xr_dir, R"({"view": {"width": 64, "height": 64, "ipd_m": 0,

@@ -106,10 +106,10 @@ struct SessionTools {
   }
 };
 
-// The teleport's target as a ball 1 cm across whatever the zoom, in the volume frame.
+// The teleport's target as a ball 2 cm across whatever the zoom, in the volume frame.
 std::optional<AnnotationSphere> teleport_marker(const Teleport& teleport, const VolumeTransform& t) {
   if (!teleport.target()) return std::nullopt;
-  return AnnotationSphere{*teleport.target(), 0.005 / t.scale, glm::vec4(0.3f, 0.6f, 1.0f, 1.0f)};
+  return AnnotationSphere{*teleport.target(), 0.01 / t.scale, glm::vec4(0.3f, 0.6f, 1.0f, 1.0f)};
 }
 
 // What moves the volume before a frame is drawn, kept across restarts.
