@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include "annotate/annotation_store.h"
 #include "assets/assets.h"
@@ -217,6 +218,28 @@ TEST_CASE("teleport through the OpenXR test runtime: the right thumbstick click 
     }
   CHECK(near > 0);
   CHECK(elsewhere == 0);
+}
+
+TEST_CASE("teleport headless: a pose script's thumbstick_click held then released, vxr view prints the moved volume") {
+  const fs::path dir = test::scratch_dir("xr", "teleport_headless");
+  std::ofstream(dir / "teleport.json") << R"({"view": {"width": 16, "height": 16},
+    "keys": [{"frame": 0, "head": {"position": [0, 1.6, 0], "orientation": [0, 0, 0, 1]},
+                          "right": {"aim": {"position": [0, 1.6, 0]}}},
+             {"frame": 2, "right": {"thumbstick_click": true}},
+             {"frame": 4, "right": {"thumbstick_click": false}},
+             {"frame": 6}]})";
+  test::CliRun r = test::run_vxr("view --sample --headless --script " + test::shell_quote((dir / "teleport.json").string()),
+                                 dir, 180);
+  INFO("stdout: " << r.out << "\nstderr: " << r.err);
+  REQUIRE(r.rc == 0);
+  auto v = assets::sample_volume();
+  REQUIRE(v.is_ok());
+  const VolumePlacement placement{v->dims, v->voxel_size};
+  const double scale = default_volume_transform(placement).scale;
+  // As through the runtime: the volume's near face comes to 0.4 m before the head.
+  char line[128];
+  std::snprintf(line, sizeof line, "volume at (%.6f, %.6f, %.6f)", 0.0, 1.6, -0.4 - scale * 0.5 * placement.extent().y);
+  CHECK(r.out.find(line) != std::string::npos);
 }
 
 TEST_CASE("card in a headset: vxr view --card --xr shows the card's picture in the first frame's eye") {
