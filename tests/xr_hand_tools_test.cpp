@@ -298,11 +298,22 @@ TEST_CASE("hand tools: A picks the nearest traced node and the next node branche
   CHECK(picked.error.empty());
   CHECK(tools.palette().live().current_node == 1);
   CHECK(hands.report().find("last: tracing from node 1") != std::string::npos);
+  // The node the branch will start from is drawn live (a ball bigger than the tip's cursor, at node 1 = a).
+  auto current_node_balls = [&] {
+    AnnotationScene live;
+    hands.add_live(right_at({0.03, 1.5, -0.5}, 0.0), t, live);  // the tip outside the box: no cursor
+    return live.spheres;
+  };
+  REQUIRE(current_node_balls().size() == 1);
+  CHECK(glm::length(current_node_balls()[0].centre) < 1e-9);  // a is the volume's centre
   REQUIRE(press(d).stored);  // node 4, a branch below node 1
+  REQUIRE(current_node_balls().size() == 1);  // now node 4
+  CHECK(current_node_balls()[0].centre.y == doctest::Approx(4.0));
   // B: the chain is finished; the next press starts a new root.
   const HandToolFrame finished = button(d, &HandInput::secondary);
   CHECK(finished.picked);
   CHECK(tools.palette().live().current_node == annotate::kNoParent);
+  CHECK(current_node_balls().empty());
   REQUIRE(press(e).stored);  // node 5, a root
   // A with no node within the pick radius is refused in one line; nothing changes.
   const HandToolFrame far = button({0.03, 1.5, -0.5}, &HandInput::primary);

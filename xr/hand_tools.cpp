@@ -16,6 +16,7 @@ annotate::Vec3 vec3(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
 const glm::vec4 kPreview{0.8f, 0.8f, 0.8f, 1.0f};   // what is being drawn
 const glm::vec4 kStored{1.0f, 1.0f, 1.0f, 1.0f};    // stored measurements
 const glm::vec4 kCursor{0.3f, 1.0f, 0.4f, 1.0f};
+const glm::vec4 kCurrentNode{1.0f, 0.5f, 0.1f, 1.0f};  // where the next traced node hangs
 
 }  // namespace
 
@@ -101,7 +102,20 @@ HandToolFrame HandTools::update(const InputState& input, const VolumeTransform& 
       last_move_.reset();
     }
   }
+  follow_current_node();
   return out;
+}
+
+void HandTools::follow_current_node() {
+  const annotate::ToolLiveState& live = tools_.palette().live();
+  const int64_t current = tool_ == Tool::kTrace ? live.current_node : annotate::kNoParent;
+  if (current == shown_node_) return;
+  shown_node_ = current;
+  shown_node_pos_.reset();
+  if (current == annotate::kNoParent) return;
+  auto sk = tools_.store().skeleton(live.skeleton);
+  if (!sk) return;  // not drawn; the store's own error shows with the next edit
+  if (const annotate::SkeletonNode* n = sk->find(current)) shown_node_pos_ = n->pos;
 }
 
 std::string HandTools::report() const {
@@ -150,6 +164,7 @@ void HandTools::add_live(const InputState& input, const VolumeTransform& t, Anno
       for (int axis : {1, 2, 4})
         if (!(i & axis)) scene.cones.push_back({corner(i), corner(i | axis), 0.1 * r, 0.1 * r, kPreview});
   }
+  if (shown_node_pos_) scene.spheres.push_back({world(*shown_node_pos_), 0.5 * r, kCurrentNode});
   const HandInput& right = input.hands[kRight];
   if (!right.tracked) return;
   const glm::dvec3 v = tip_voxel(right, t);

@@ -66,8 +66,9 @@ class HandTools {
   // What the store holds, drawn as `vxr render` draws it, and with the
   // measure tool the stored measurements too (thin cones).
   Result<AnnotationScene> stored_scene(uint32_t timepoint) const;
-  // Adds what is live: the measurement or box being drawn, and a small ball
-  // at the right hand's tip while it is inside the volume's box.
+  // Adds what is live: the measurement or box being drawn, the node the next
+  // traced node hangs below (after a pick: where the branch starts), and a
+  // small ball at the right hand's tip while it is inside the volume's box.
   void add_live(const InputState& input, const VolumeTransform& t, AnnotationScene& scene) const;
 
  private:
@@ -82,6 +83,10 @@ class HandTools {
   bool menu_down_ = false;
   bool primary_down_ = false, secondary_down_ = false;  // the right hand's, last frame
   std::optional<annotate::Vec3> last_move_;  // no repeated move while the hand rests
+  // The trace tool's current node and where it is (read once when it changes, not per frame).
+  int64_t shown_node_ = annotate::kNoParent;
+  std::optional<annotate::Vec3> shown_node_pos_;
+  void follow_current_node();
 };
 
 // The tool after `tool` in the menu's cycle.
