@@ -268,6 +268,76 @@ TEST_CASE("hand tools: tracing chains a node per press, roi drags a box while he
   CHECK((*rois)[0].max[2] == doctest::Approx(9.0));
 }
 
+TEST_CASE("hand tools: A picks the nearest traced node and the next node branches from it, B finishes the chain") {
+  auto store = fresh_store(fs::path(VXR_TEST_OUT_DIR) / "hand_tools" / "pick_finish");
+  ViewerTools tools(*store);
+  HandToolSettings settings;
+  settings.tool = Tool::kTrace;
+  HandTools hands(tools, kPlacement, settings);
+  const xr::VolumeTransform t = plain();
+  // A chain a -> b -> c, 4 mm (8 voxels) apart along x.
+  const glm::dvec3 a{0.0, 1.5, -0.5}, b{0.004, 1.5, -0.5}, c{0.008, 1.5, -0.5}, d{0.001, 1.504, -0.5},
+      e{-0.006, 1.497, -0.5};
+  auto press = [&](const glm::dvec3& tip) {
+    hands.update(right_at(tip, 0.0), t, 0);
+    return hands.update(right_at(tip, 1.0), t, 0);
+  };
+  auto button = [&](const glm::dvec3& tip, bool HandInput::*which) {
+    InputState in = right_at(tip, 0.0);
+    hands.update(in, t, 0);
+    in.hands[kRight].*which = true;
+    const HandToolFrame first = hands.update(in, t, 0);
+    CHECK(!hands.update(in, t, 0).picked);  // held: no repeat
+    return first;
+  };
+  for (const glm::dvec3& tip : {a, b, c}) REQUIRE(press(tip).stored);
+  // A 1 mm (2 voxels) from a: a becomes the node the next one hangs below.
+  const HandToolFrame picked = button(a + glm::dvec3(0.001, 0, 0), &HandInput::primary);
+  CHECK(picked.picked);
+  CHECK(!picked.stored);
+  CHECK(picked.error.empty());
+  CHECK(tools.palette().live().current_node == 1);
+  CHECK(hands.report().find("last: tracing from node 1") != std::string::npos);
+  // The node the branch will start from is drawn live (a ball bigger than the tip's cursor, at node 1 = a).
+  auto current_node_balls = [&] {
+    AnnotationScene live;
+    hands.add_live(right_at({0.03, 1.5, -0.5}, 0.0), t, live);  // the tip outside the box: no cursor
+    return live.spheres;
+  };
+  REQUIRE(current_node_balls().size() == 1);
+  CHECK(glm::length(current_node_balls()[0].centre) < 1e-9);  // a is the volume's centre
+  REQUIRE(press(d).stored);  // node 4, a branch below node 1
+  REQUIRE(current_node_balls().size() == 1);  // now node 4
+  CHECK(current_node_balls()[0].centre.y == doctest::Approx(4.0));
+  // B: the chain is finished; the next press starts a new root.
+  const HandToolFrame finished = button(d, &HandInput::secondary);
+  CHECK(finished.picked);
+  CHECK(tools.palette().live().current_node == annotate::kNoParent);
+  CHECK(current_node_balls().empty());
+  REQUIRE(press(e).stored);  // node 5, a root
+  // A with no node within the pick radius is refused in one line; nothing changes.
+  const HandToolFrame far = button({0.03, 1.5, -0.5}, &HandInput::primary);
+  CHECK(!far.picked);
+  CHECK(far.error.find("no traced node within") != std::string::npos);
+
+  auto skeletons = store->skeletons();
+  REQUIRE(skeletons.is_ok());
+  REQUIRE(skeletons->size() == 1);
+  auto sk = store->skeleton((*skeletons)[0].id);
+  REQUIRE(sk.is_ok());
+  REQUIRE(sk->nodes().size() == 5);
+  const int64_t parents[] = {annotate::kNoParent, 1, 2, 1, annotate::kNoParent};
+  for (int64_t id = 1; id <= 5; ++id) {
+    CAPTURE(id);
+    REQUIRE(sk->find(id) != nullptr);
+    CHECK(sk->find(id)->parent == parents[id - 1]);
+  }
+  // The left hand's buttons do nothing (pick and finish belong to the tool hand).
+  InputState left = right_at(a, 0.0);
+  left.hands[kLeft].primary = left.hands[kLeft].secondary = true;
+  CHECK(!hands.update(left, t, 0).picked);
+}
+
 TEST_CASE("hand tools: the trigger never grabs, the volume moves only on squeeze") {
   xr::VolumeTransform t = plain();
   GrabInteraction grab;
@@ -494,4 +564,135 @@ TEST_CASE("hand tools through the OpenXR test runtime: trigger presses place mar
   REQUIRE(report.size() == 1);
   CHECK(report[0]["haptic_pulses"].get<int>() == 2);
   CHECK_MESSAGE(test::core_validation_messages(dir).empty(), test::core_validation_messages(dir));
+}
+
+// ---- tracing: a chain, a pick, a branch, a finish ----
+
+namespace {
+
+// Tips in the reference space, inside the sample at its default transform.
+const glm::dvec3 kTrace[] = {{-0.03, 1.62, -0.47}, {0.0, 1.60, -0.50}, {0.04, 1.57, -0.53},
+                             {-0.05, 1.65, -0.45}, {0.02, 1.66, -0.48}};
+// Node n (1-based) hangs below kTraceParent[n - 1] (0: a root).
+const int64_t kTraceParent[] = {0, 1, 2, 1, 0};
+
+// Traces kTrace[0..2] as a chain, picks node 1 with `pick` (the script's name
+// for the control the profile binds to pick), traces kTrace[3] (a branch below
+// node 1), finishes with `finish`, traces kTrace[4] (a new root).
+std::string trace_script(uint64_t base, const std::string& pick, const std::string& finish, int size,
+                         const std::string& extra = "") {
+  std::string keys;
+  uint64_t frame = base;
+  auto key = [&](const std::string& right) {
+    keys += std::string(keys.empty() ? "" : ",\n") + R"({"frame": )" + std::to_string(frame) + R"(, "right": {)" +
+            right + "}}";
+    frame += 2;
+  };
+  auto aim = [&](const glm::dvec3& tip) { key(R"("aim": {"position": )" + vec_json(tip + kTipOffset) + "}"); };
+  auto node = [&](const glm::dvec3& tip) {
+    aim(tip);
+    key(R"("trigger": 1)");
+    key(R"("trigger": 0)");
+  };
+  for (int i = 0; i < 3; ++i) node(kTrace[i]);
+  aim(kTrace[0]);
+  key("\"" + pick + "\": true");
+  key("\"" + pick + "\": false");
+  node(kTrace[3]);
+  key("\"" + finish + "\": true");
+  key("\"" + finish + "\": false");
+  node(kTrace[4]);
+  return R"({"view": {"width": )" + std::to_string(size) + R"(, "height": )" + std::to_string(size) + "}" + extra +
+         R"(, "keys": [)" + keys + "]}";
+}
+
+uint64_t trace_script_end(uint64_t base) { return base + 2 * 20; }  // 20 keys, 2 frames apart
+
+// The store holds one skeleton of the five traced nodes, each where its tip
+// was, hanging below the node kTraceParent says.
+void check_traced(annotate::AnnotationStore& store, double tolerance_voxels) {
+  auto skeletons = store.skeletons();
+  REQUIRE(skeletons.is_ok());
+  REQUIRE(skeletons->size() == 1);
+  auto sk = store.skeleton((*skeletons)[0].id);
+  REQUIRE(sk.is_ok());
+  REQUIRE(sk->nodes().size() == 5);
+  const SampleFrame frame = sample_frame();
+  for (int64_t id = 1; id <= 5; ++id) {
+    CAPTURE(id);
+    const annotate::SkeletonNode* n = sk->find(id);
+    REQUIRE(n != nullptr);
+    CHECK(n->parent == (kTraceParent[id - 1] == 0 ? annotate::kNoParent : kTraceParent[id - 1]));
+    const glm::dvec3 got(n->pos[0], n->pos[1], n->pos[2]);
+    CHECK(glm::length(got - expected_voxel(frame, kTrace[id - 1])) < tolerance_voxels);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("hand tools end to end: a headless pose script traces a chain, picks node 1 with A, branches, finishes with B") {
+  const fs::path dir = test::scratch_dir("hand_tools", "headless_trace");
+  const fs::path store = dir / "store";
+  fresh_store(store);
+  std::ofstream(dir / "trace.json") << trace_script(0, "a", "b", 32);
+  test::CliRun r = test::run_vxr("view --sample --headless --tool trace --script " + q(dir / "trace.json") +
+                                     " --annotations " + q(store),
+                                 dir, 180);
+  INFO("stdout: " << r.out << "\nstderr: " << r.err);
+  REQUIRE(r.rc == 0);
+  CHECK(r.out.find("vxr view: tool trace; last: tracing from node 1") != std::string::npos);
+  CHECK(r.out.find("last: node 4 of skeleton 1 below node 1") != std::string::npos);
+  CHECK(r.out.find("last: the next node starts a new branch root") != std::string::npos);
+  CHECK(r.out.find("last: node 5 of skeleton 1 (a root)") != std::string::npos);
+  auto opened = annotate::AnnotationStore::open(store.string(), false);
+  REQUIRE(opened.is_ok());
+  check_traced(**opened, 1e-3);
+}
+
+TEST_CASE("hand tools through the OpenXR test runtime: pick and finish reach the tracing tool on every profile with buttons") {
+  test::GpuTestScope scope;
+  auto v = assets::sample_volume();
+  REQUIRE(v.is_ok());
+  const VolumePlacement placement{v->dims, v->voxel_size};
+  auto source = DenseChunkSource::create({*v});
+  REQUIRE(source.is_ok());
+  // The script's name for the physical control each profile binds to pick and to finish (actions.cpp).
+  struct Case {
+    const char* profile;
+    const char* pick;
+    const char* finish;
+  };
+  const Case cases[] = {{"oculus/touch_controller", "a", "b"},
+                        {"valve/index_controller", "a", "b"},
+                        {"htc/vive_controller", "thumbstick_click", "menu"},
+                        {"microsoft/motion_controller", "trackpad_click", "menu"}};
+  for (const Case& c : cases) {
+    INFO(c.profile);
+    const std::string dir = test::xr_out_dir(std::string("trace_") + (std::strchr(c.profile, '/') + 1));
+    test::use_test_runtime(dir, trace_script(10, c.pick, c.finish, 16,
+                                             std::string(R"(, "profile": "/interaction_profiles/)") + c.profile + "\""));
+    auto store = fresh_store(fs::path(dir) / "store");
+    ViewOptions o;
+    o.frames = trace_script_end(10) + 2;
+    o.tool_store = store;
+    o.hand_tools.tool = Tool::kTrace;
+    std::vector<std::string> lines;
+    o.on_tool_report = [&](const std::string& line) { lines.push_back(line); };
+    const TargetFactory openxr = []() -> Result<std::unique_ptr<FrameTarget>> {
+      auto t = OpenXrTarget::create({});
+      if (!t) return t.status();
+      return std::unique_ptr<FrameTarget>(std::move(t).value());
+    };
+    auto stats = run_view(openxr, *source, o, default_volume_transform(placement));
+    REQUIRE_MESSAGE(stats.is_ok(), stats.status().to_string());
+    check_traced(*store, 1.0);  // OpenXR poses are float: within a voxel
+    // Five nodes, a pick and a finish: each a line and a haptic click.
+    REQUIRE(lines.size() == 7);
+    CHECK(lines[3].find("tracing from node 1") != std::string::npos);
+    CHECK(lines[5].find("the next node starts a new branch root") != std::string::npos);
+    const nlohmann::json report = test::runtime_report(dir);
+    REQUIRE(report.size() == 1);
+    CHECK(report[0]["haptic_pulses"].get<int>() == 7);
+    CHECK_MESSAGE(test::core_validation_messages(dir).empty(), test::core_validation_messages(dir));
+  }
 }

@@ -270,9 +270,9 @@ int run(const Options& given) {
   std::printf("vxr view: %s\n", choice->reason.c_str());
   std::fflush(stdout);
 
-  if (!o.card.empty() && choice->kind != xr::TargetKind::kHeadless)
+  if (!o.card.empty() && choice->kind == xr::TargetKind::kDesktop)
     std::fprintf(stderr, "vxr view: note: --card: settings, channels, timepoint and annotations restored; the card's "
-                         "camera is restored headless only (a headset or window keeps its own pose)\n");
+                         "camera is restored headless and in a headset only (a window keeps its own camera)\n");
 
   xr::ViewOptions vo;
   vo.frames = o.frames;
@@ -282,6 +282,9 @@ int run(const Options& given) {
   vo.frame.lod.lod_bias = o.lod_bias;
   vo.frame.lod.timepoint = session->timepoint;
   vo.frame_budget_ms = o.frame_budget_ms;
+  // A headset keeps its own head pose and fov: the volume is placed so the head
+  // sees what the card's (or a --settings Scene's) camera saw; headless draws the camera itself.
+  if (pose && choice->kind == xr::TargetKind::kOpenXr) vo.place_for_camera = req.headless.camera;
   // The desktop viewer holds the store open itself (its tools edit it) and draws its markers over the volume.
   const bool viewer_has_store = choice->kind == xr::TargetKind::kDesktop && req.viewer && req.viewer->store;
   if (viewer_has_store && o.tool_given)
@@ -369,7 +372,8 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--class", o->tool_class, "the class count markers get (default cell)");
   cmd->add_option("--card", o->card,
                   "STORE:ID (or ID of the --annotations store or the input project's): restore a card's volume, "
-                  "settings, channels, timepoint and annotations; headless, its exact camera and size too");
+                  "settings, channels, timepoint and annotations; headless, its exact camera and size too; in a "
+                  "headset, the volume placed so the first frame's head pose is the card's camera");
   add_session_flags(cmd, &o->flags);
   cmd->callback([&inv, o, cmd] {
     o->lod_bias_given = cmd->count("--lod-bias") > 0;

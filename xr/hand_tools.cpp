@@ -16,6 +16,7 @@ annotate::Vec3 vec3(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
 const glm::vec4 kPreview{0.8f, 0.8f, 0.8f, 1.0f};   // what is being drawn
 const glm::vec4 kStored{1.0f, 1.0f, 1.0f, 1.0f};    // stored measurements
 const glm::vec4 kCursor{0.3f, 1.0f, 0.4f, 1.0f};
+const glm::vec4 kCurrentNode{1.0f, 0.5f, 0.1f, 1.0f};  // where the next traced node hangs
 
 }  // namespace
 
@@ -63,8 +64,18 @@ HandToolFrame HandTools::update(const InputState& input, const VolumeTransform& 
     } else if (tools_.revision() != before) {
       out.stored = true;
       out.hand = h;
+    } else if (action == ToolAction::kPick || action == ToolAction::kFinish) {
+      out.picked = true;
+      out.hand = h;
     }
   };
+  // The right hand's buttons, on the press only (a held button does not repeat).
+  const HandInput& right = input.hands[kRight];
+  const bool pick = right.tracked && right.primary, finish = right.tracked && right.secondary;
+  if (pick && !primary_down_) send(kRight, ToolAction::kPick, vec3(tip_voxel(right, t)));
+  if (finish && !secondary_down_) send(kRight, ToolAction::kFinish, vec3(tip_voxel(right, t)));
+  primary_down_ = pick;
+  secondary_down_ = finish;
   for (Hand h : {kRight, kLeft}) {
     const HandInput& hand = input.hands[h];
     const bool was = held_[h];
@@ -91,7 +102,20 @@ HandToolFrame HandTools::update(const InputState& input, const VolumeTransform& 
       last_move_.reset();
     }
   }
+  follow_current_node();
   return out;
+}
+
+void HandTools::follow_current_node() {
+  const annotate::ToolLiveState& live = tools_.palette().live();
+  const int64_t current = tool_ == Tool::kTrace ? live.current_node : annotate::kNoParent;
+  if (current == shown_node_) return;
+  shown_node_ = current;
+  shown_node_pos_.reset();
+  if (current == annotate::kNoParent) return;
+  auto sk = tools_.store().skeleton(live.skeleton);
+  if (!sk) return;  // not drawn; the store's own error shows with the next edit
+  if (const annotate::SkeletonNode* n = sk->find(current)) shown_node_pos_ = n->pos;
 }
 
 std::string HandTools::report() const {
@@ -140,6 +164,7 @@ void HandTools::add_live(const InputState& input, const VolumeTransform& t, Anno
       for (int axis : {1, 2, 4})
         if (!(i & axis)) scene.cones.push_back({corner(i), corner(i | axis), 0.1 * r, 0.1 * r, kPreview});
   }
+  if (shown_node_pos_) scene.spheres.push_back({world(*shown_node_pos_), 0.5 * r, kCurrentNode});
   const HandInput& right = input.hands[kRight];
   if (!right.tracked) return;
   const glm::dvec3 v = tip_voxel(right, t);

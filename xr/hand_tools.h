@@ -6,8 +6,11 @@
 // (hysteresis, as GrabSettings); while held, moves preview a measurement or
 // box. Either hand's menu button cycles count -> measure -> trace -> track ->
 // roi. The left hand's trigger removes the nearest (ToolAction::kRemove at
-// its tip). Grabbing stays on the squeeze (xr/interaction.h), so the
-// trigger hand never also grabs.
+// its tip). The right hand's primary button (A) picks at its tip (trace: the
+// nearest node becomes the one the next node hangs below) and its secondary
+// button (B) finishes (trace: the next node starts a new root; track: the
+// next marker starts a new track). Grabbing stays on the squeeze
+// (xr/interaction.h), so the trigger hand never also grabs.
 //
 // Edits go through ViewerTools (the desktop viewer's palette and revision),
 // so the holder of the store redraws markers when revision() changes.
@@ -38,6 +41,7 @@ struct HandToolFrame {
   bool stored = false;        // an edit reached the store (a haptic click)
   Hand hand = kRight;         // ... made by this hand's trigger
   bool tool_changed = false;  // the menu button cycled the tool
+  bool picked = false;        // a pick or finish was applied (the live state changed, nothing stored)
   std::string error;          // an event the tools refused, one line (empty: none)
 };
 
@@ -62,8 +66,9 @@ class HandTools {
   // What the store holds, drawn as `vxr render` draws it, and with the
   // measure tool the stored measurements too (thin cones).
   Result<AnnotationScene> stored_scene(uint32_t timepoint) const;
-  // Adds what is live: the measurement or box being drawn, and a small ball
-  // at the right hand's tip while it is inside the volume's box.
+  // Adds what is live: the measurement or box being drawn, the node the next
+  // traced node hangs below (after a pick: where the branch starts), and a
+  // small ball at the right hand's tip while it is inside the volume's box.
   void add_live(const InputState& input, const VolumeTransform& t, AnnotationScene& scene) const;
 
  private:
@@ -76,7 +81,12 @@ class HandTools {
   annotate::Tool tool_;
   std::array<bool, 2> held_{false, false};
   bool menu_down_ = false;
+  bool primary_down_ = false, secondary_down_ = false;  // the right hand's, last frame
   std::optional<annotate::Vec3> last_move_;  // no repeated move while the hand rests
+  // The trace tool's current node and where it is (read once when it changes, not per frame).
+  int64_t shown_node_ = annotate::kNoParent;
+  std::optional<annotate::Vec3> shown_node_pos_;
+  void follow_current_node();
 };
 
 // The tool after `tool` in the menu's cycle.

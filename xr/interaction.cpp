@@ -40,7 +40,8 @@ std::array<bool, 2> GrabInteraction::update(const InputState& input, VolumeTrans
   if (active_count_ == 0 && dt > 0.0) {
     for (int h = 0; h < 2; ++h) {
       const HandInput& hand = input.hands[h];
-      if (!hand.tracked || std::abs(hand.thumbstick.y) < s_.deadzone) continue;
+      // A pressed stick aims a teleport (xr/teleport.h); a Vive trackpad's click reads as a push too.
+      if (!hand.tracked || hand.stick_click || std::abs(hand.thumbstick.y) < s_.deadzone) continue;
       const glm::dvec3 forward = hand.aim.orientation * glm::dvec3(0, 0, -1);
       t.position -= forward * (s_.fly_speed * hand.thumbstick.y * dt);
     }

@@ -2,7 +2,8 @@
 // one hand grabs and moves/rotates the volume rigidly; two hands pinch to
 // scale it about their midpoint (and carry it with the midpoint). A
 // thumbstick pushed forward on a hand that is not grabbing flies the user
-// along that hand's aim ray (the volume moves the other way).
+// along that hand's aim ray (the volume moves the other way); not while the
+// stick is pressed in, which aims a teleport (xr/teleport.h).
 //
 // Works on any InputState, whichever target or controller produced it. Each
 // time the set of grabbing hands changes, the gesture re-anchors on the

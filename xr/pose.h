@@ -40,6 +40,9 @@ struct HandInput {
   double trigger = 0.0;  // 0..1
   glm::dvec2 thumbstick{0.0};
   bool menu = false;
+  bool stick_click = false;  // the thumbstick pressed in (Vive: the left trackpad): teleport
+  bool primary = false;      // right hand: A (Vive: trackpad click, WMR: trackpad click): pick a node
+  bool secondary = false;    // right hand: B (Vive and WMR: the right menu button): finish the branch
 };
 
 enum Hand { kLeft = 0, kRight = 1 };

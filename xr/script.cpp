@@ -29,6 +29,10 @@ void read_hand(const nlohmann::json& j, ScriptHand& h) {
   if (j.contains("trigger")) h.trigger = j["trigger"].get<double>();
   if (j.contains("thumbstick")) h.thumbstick = {j["thumbstick"].at(0).get<double>(), j["thumbstick"].at(1).get<double>()};
   if (j.contains("menu")) h.menu = j["menu"].get<bool>();
+  if (j.contains("thumbstick_click")) h.thumbstick_click = j["thumbstick_click"].get<bool>();
+  if (j.contains("trackpad_click")) h.trackpad_click = j["trackpad_click"].get<bool>();
+  if (j.contains("a")) h.a = j["a"].get<bool>();
+  if (j.contains("b")) h.b = j["b"].get<bool>();
 }
 
 Pose lerp_pose(const Pose& a, const Pose& b, double w) {

@@ -13,6 +13,15 @@
 //     ]
 //   }
 //
+// A hand names its physical controls: "squeeze", "trigger" (0..1),
+// "thumbstick" [x, y] (a Vive's trackpad), and the buttons "menu",
+// "thumbstick_click" (a Vive's trackpad click), "trackpad_click" (Windows
+// Mixed Reality's trackpad), "a" (A, or X on a left Touch) and "b" (B or Y).
+// The test runtime answers each action from the control its binding names
+// (so a script tests the bindings); the headless target reads the buttons
+// as an Oculus Touch pair does: a -> primary, b -> secondary,
+// thumbstick_click -> stick_click (xr/pose.h).
+//
 // Orientation is [x, y, z, w] (OpenXR order). A key changes only what it
 // names; everything else carries over from the key before. Between keys,
 // positions are interpolated linearly and orientations by slerp; with
@@ -42,6 +51,8 @@ struct ScriptHand {
   double squeeze = 0.0, trigger = 0.0;
   glm::dvec2 thumbstick{0.0};
   bool menu = false;
+  bool thumbstick_click = false, trackpad_click = false;
+  bool a = false, b = false;  // A/X, B/Y
 };
 
 struct ScriptFrame {

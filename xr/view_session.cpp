@@ -84,11 +84,11 @@ struct SessionTools {
   // Applies this frame's input; the eyes get the store's scene (re-read after
   // an edit) and what is live over it.
   Status frame(const FrameState& f, const VolumeTransform& t, uint32_t timepoint, FrameTarget& target,
-               EyeRenderer& eyes) {
+               EyeRenderer& eyes, const std::optional<AnnotationSphere>& marker) {
     const HandToolFrame r = hands.update(f.input, t, timepoint);
-    if (r.stored) target.haptic_pulse(r.hand, 0.3, 0.01);
+    if (r.stored || r.picked) target.haptic_pulse(r.hand, 0.3, 0.01);
     if (!r.error.empty()) report(std::string("tool ") + annotate::tool_name(hands.tool()) + ": " + r.error);
-    if (r.stored || r.tool_changed) report(hands.report());
+    if (r.stored || r.tool_changed || r.picked) report(hands.report());
     if (hands.tools().revision() != drawn_revision || timepoint != drawn_timepoint || hands.tool() != drawn_tool) {
       // A store unreadable from the start ends the run; later, the last picture stays and says why.
       auto scene = hands.stored_scene(timepoint);
@@ -101,13 +101,27 @@ struct SessionTools {
     }
     AnnotationScene scene = stored;
     hands.add_live(f.input, t, scene);
+    if (marker) scene.spheres.push_back(*marker);
     return eyes.set_annotations(std::move(scene), /*make_pass=*/true);
   }
 };
 
+// The teleport's target as a ball 2 cm across whatever the zoom, in the volume frame.
+std::optional<AnnotationSphere> teleport_marker(const Teleport& teleport, const VolumeTransform& t) {
+  if (!teleport.target()) return std::nullopt;
+  return AnnotationSphere{*teleport.target(), 0.01 / t.scale, glm::vec4(0.3f, 0.6f, 1.0f, 1.0f)};
+}
+
+// What moves the volume before a frame is drawn, kept across restarts.
+struct Motion {
+  GrabInteraction grab;
+  Teleport teleport;
+  bool placed = false;  // ViewOptions::place_for_camera applied
+};
+
 // One run of a target: returns kRestart when the target lost its session.
 Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkSource>& source,
-                         const ViewOptions& options, GrabInteraction& grab, FrameBudget& budget, HandTools* hands,
+                         const ViewOptions& options, Motion& motion, FrameBudget& budget, HandTools* hands,
                          ViewStats& stats) {
   gpu::ContextOptions copts = gpu::ContextOptions::from_env();
   VXR_RETURN_IF_ERROR(target.prepare_context(copts));
@@ -131,12 +145,10 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
   target.use_chunk_cache(&cache, source.get());
   VXR_ASSIGN_OR_RETURN(eyes, EyeRenderer::create(*ctx, source, &cache, options.channels));
   std::optional<SessionTools> tools;
-  if (hands) {
-    tools.emplace(SessionTools{*hands, options});
-    VXR_RETURN_IF_ERROR(eyes->set_annotations({}, /*make_pass=*/true));
-  } else {
-    VXR_RETURN_IF_ERROR(eyes->set_annotations(options.annotations));
-  }
+  // The annotation pass is made up front (the teleport's marker needs it too), so no frame builds it.
+  if (hands) tools.emplace(SessionTools{*hands, options});
+  VXR_RETURN_IF_ERROR(eyes->set_annotations(hands ? AnnotationScene{} : options.annotations, /*make_pass=*/true));
+  bool marker_drawn = false;  // without hand tools: the teleport's marker is over options.annotations
   // Pool changes the settings need (apron 2 for gradients) before any frame records.
   VXR_RETURN_IF_ERROR(eyes->renderer().prepare(options.settings));
   VXR_RETURN_IF_ERROR(commands.create(*ctx));
@@ -147,6 +159,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
   RenderSettings drawn_settings = options.settings;
   int64_t last_display_ns = 0;
   double total_ms = 0.0;
+  Pose head;  // the last frame's with views (a frame without views keeps it)
   for (;;) {
     VXR_TRACE_SCOPE("xr.frame");
     auto frame = target.wait_frame();
@@ -163,14 +176,32 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
                           ? std::min(0.1, double(frame->display_time_ns - last_display_ns) * 1e-9)
                           : 0.0;
     last_display_ns = frame->display_time_ns;
-    const auto started = grab.update(frame->input, stats.transform, dt);
+    if (!frame->views.empty()) head = head_of_views(frame->views);
+    if (options.place_for_camera && !motion.placed && frame->should_render && !frame->views.empty()) {
+      stats.transform = transform_placing_camera(*options.place_for_camera, head, stats.transform.scale);
+      motion.placed = true;
+    }
+    const auto started = motion.grab.update(frame->input, stats.transform, dt);
     for (int h = 0; h < 2; ++h)
       if (started[h]) target.haptic_pulse(Hand(h), 0.5, 0.02);
+    const TeleportFrame jump = motion.teleport.update(frame->input, head, stats.transform);
+    if (jump.moved) {
+      target.haptic_pulse(jump.hand, 0.5, 0.02);
+      ++stats.teleports;
+    }
+    const std::optional<AnnotationSphere> marker = teleport_marker(motion.teleport, stats.transform);
 
     BrickFrameSettings fs = options.frame;
     if (options.frame_budget_ms > 0.0) fs.lod.lod_bias = budget.bias;
     if (frame->settings) fs.lod.timepoint = std::min(frame->timepoint, source->info().timepoints - 1);
-    if (tools) VXR_RETURN_IF_ERROR(tools->frame(*frame, stats.transform, fs.lod.timepoint, target, *eyes));
+    if (tools) {
+      VXR_RETURN_IF_ERROR(tools->frame(*frame, stats.transform, fs.lod.timepoint, target, *eyes, marker));
+    } else if (marker || marker_drawn) {
+      AnnotationScene scene = options.annotations;
+      if (marker) scene.spheres.push_back(*marker);
+      VXR_RETURN_IF_ERROR(eyes->set_annotations(std::move(scene), /*make_pass=*/true));
+      marker_drawn = marker.has_value();
+    }
     if (frame->settings && !(*frame->settings == drawn_settings)) {
       // An edit the brick renderer cannot draw keeps the last picture and says why.
       Status ok = check_brick_settings(*frame->settings, eyes->renderer().channels());
@@ -282,24 +313,24 @@ Result<ViewStats> run_view(const TargetFactory& make_target, std::shared_ptr<con
   VXR_RETURN_IF_ERROR(check_brick_settings(options.settings, uint32_t(std::max<size_t>(1, options.channels.size()))));
   ViewStats stats;
   stats.transform = initial;
-  GrabInteraction grab;
   // Outside the restart loop: a recovered session keeps the tool and what it was drawing.
   std::unique_ptr<ViewerTools> viewer_tools;
   std::unique_ptr<HandTools> hands;
+  const VolumeInfo& info = source->info();
+  const VolumePlacement placement{{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])},
+                                  info.voxel_size};
   if (options.tool_store) {
-    const VolumeInfo& info = source->info();
-    const VolumePlacement placement{{uint32_t(info.dims[0]), uint32_t(info.dims[1]), uint32_t(info.dims[2])},
-                                    info.voxel_size};
     viewer_tools = std::make_unique<ViewerTools>(*options.tool_store);
     hands = std::make_unique<HandTools>(*viewer_tools, placement, options.hand_tools);
   }
+  Motion motion{GrabInteraction(), Teleport(placement, options.teleport)};
   FrameBudget budget;
   budget.target_ms = options.frame_budget_ms;
   budget.bias = options.frame.lod.lod_bias;
   for (;;) {
     std::unique_ptr<FrameTarget> target;
     VXR_ASSIGN_OR_RETURN(target, make_target());
-    auto outcome = run_once(*target, source, options, grab, budget, hands.get(), stats);
+    auto outcome = run_once(*target, source, options, motion, budget, hands.get(), stats);
     if (!outcome) {
       if (!target->wants_restart()) return outcome.status();
       log_warn("XR: " + outcome.status().message());

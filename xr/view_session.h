@@ -24,6 +24,7 @@
 #include <functional>
 #include <memory>
 #include <nlohmann/json_fwd.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,7 @@
 #include "xr/hand_tools.h"
 #include "xr/interaction.h"
 #include "xr/lens_warp.h"
+#include "xr/teleport.h"
 #include "xr/volume_transform.h"
 
 namespace vxr::xr {
@@ -58,6 +60,12 @@ struct ViewOptions {
   HandToolSettings hand_tools;
   // Told one line when the tool changes or an edit is stored (null: log_info).
   std::function<void(const std::string& line)> on_tool_report;
+  // A ray caster camera (volume frame), e.g. a restored card's: the first
+  // rendered frame places the volume so that the head sees what it sees
+  // (transform_placing_camera, at the initial transform's scale). Targets that
+  // draw ViewSpec::camera themselves (headless --card) leave it empty.
+  std::optional<Camera> place_for_camera;
+  TeleportSettings teleport;
 };
 
 struct ViewStats {
@@ -79,6 +87,7 @@ struct ViewStats {
   uint64_t readbacks = 0;                    // image readbacks during the frames (PNG output only)
   uint64_t bricks_uploaded = 0;
   VolumeTransform transform;   // where the interaction left the volume
+  uint64_t teleports = 0;      // jumps the teleport made
 };
 
 // p50/p99 frame ms, frames complete, pipelines after frame 1, readbacks per

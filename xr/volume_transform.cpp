@@ -26,6 +26,31 @@ Camera camera_for_view(const ViewSpec& view, const VolumeTransform& t) {
   return c;
 }
 
+VolumeTransform transform_placing_camera(const Camera& camera, const Pose& head, double scale) {
+  // The camera's frame in the volume (right, up, back), as rays_in_world builds it.
+  const glm::dvec3 f = glm::normalize(camera.target - camera.eye);
+  glm::dvec3 r = glm::cross(f, camera.up);
+  if (glm::length(r) < 1e-12) r = glm::cross(f, glm::dvec3(1, 0, 0));  // looking straight along up
+  r = glm::normalize(r);
+  const glm::dvec3 u = glm::cross(r, f);
+  const glm::dquat camera_in_volume = glm::quat_cast(glm::dmat3(r, u, -f));
+  VolumeTransform t;
+  t.scale = scale;
+  t.orientation = glm::normalize(head.orientation * glm::conjugate(camera_in_volume));
+  t.position = head.position - t.orientation * (scale * camera.eye);
+  return t;
+}
+
+Pose head_of_views(const std::vector<ViewSpec>& views) {
+  Pose head;
+  if (views.empty()) return head;
+  head.orientation = views.front().pose.orientation;
+  head.position = glm::dvec3(0.0);
+  for (const ViewSpec& v : views) head.position += v.pose.position;
+  head.position /= double(views.size());
+  return head;
+}
+
 std::vector<ViewSpec> stereo_views(const Pose& head, double ipd_m, const Fov& fov, uint32_t width,
                                    uint32_t height) {
   std::vector<ViewSpec> views(2);

@@ -34,6 +34,17 @@ VolumeTransform default_volume_transform(const VolumePlacement& placement, doubl
 // The ray caster camera for `view` (pose and off-axis fov) with the volume at `t`.
 Camera camera_for_view(const ViewSpec& view, const VolumeTransform& t);
 
+// The transform that makes a view from `head` see what the ray caster camera
+// `camera` (volume frame) sees: the camera's eye lands on the head and its
+// view direction and up on the head's -z and +y. `scale` (metres per volume
+// unit) is free, since a uniform scale about the eye leaves the picture
+// as it is (only stereo depth and the hands' reach change with it).
+VolumeTransform transform_placing_camera(const Camera& camera, const Pose& head, double scale);
+
+// The head between `views`: the mean of their positions, the first view's
+// orientation (the eyes of a head-mounted display look the same way).
+Pose head_of_views(const std::vector<ViewSpec>& views);
+
 // Two eyes `ipd_m` apart on the head's x axis, sharing `fov` and size.
 std::vector<ViewSpec> stereo_views(const Pose& head, double ipd_m, const Fov& fov, uint32_t width,
                                    uint32_t height);

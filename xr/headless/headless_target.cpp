@@ -62,6 +62,9 @@ Result<FrameState> HeadlessTarget::wait_frame() {
     in.trigger = sh.trigger;
     in.thumbstick = sh.thumbstick;
     in.menu = sh.menu;
+    in.stick_click = sh.thumbstick_click;  // as an Oculus Touch pair (xr/script.h)
+    in.primary = sh.a;
+    in.secondary = sh.b;
   }
   return f;
 }

@@ -6,10 +6,13 @@
 namespace vxr::xr {
 namespace {
 
+enum class Side { kBoth, kLeft, kRight };
+
 struct Binding {
-  const char* action;  // "grip", "aim", "grab", "trigger", "thumbstick", "menu", "haptic"
+  const char* action;  // "grip", "aim", "grab", "trigger", "thumbstick", "menu", "stick_click", "pick",
+                       // "finish", "haptic"
   const char* path;    // under /user/hand/{left,right}
-  bool left_only = false;
+  Side side = Side::kBoth;
 };
 
 struct Profile {
@@ -18,6 +21,9 @@ struct Profile {
 };
 
 // One table per controller family (what each physical control means to vxr).
+// Pick and finish belong to the tool hand (right); a controller without face
+// buttons gives them its trackpad click and right menu button, and keeps the
+// left menu button for cycling tools.
 const std::vector<Profile>& profiles() {
   static const std::vector<Profile> p = {
       {"/interaction_profiles/khr/simple_controller",
@@ -26,18 +32,26 @@ const std::vector<Profile>& profiles() {
       {"/interaction_profiles/oculus/touch_controller",
        {{"grip", "/input/grip/pose"}, {"aim", "/input/aim/pose"}, {"grab", "/input/squeeze/value"},
         {"trigger", "/input/trigger/value"}, {"thumbstick", "/input/thumbstick"},
-        {"menu", "/input/menu/click", true}, {"haptic", "/output/haptic"}}},
+        {"menu", "/input/menu/click", Side::kLeft}, {"stick_click", "/input/thumbstick/click"},
+        {"pick", "/input/a/click", Side::kRight}, {"finish", "/input/b/click", Side::kRight},
+        {"haptic", "/output/haptic"}}},
       {"/interaction_profiles/htc/vive_controller",
        {{"grip", "/input/grip/pose"}, {"aim", "/input/aim/pose"}, {"grab", "/input/squeeze/click"},
-        {"trigger", "/input/trigger/value"}, {"thumbstick", "/input/trackpad"}, {"menu", "/input/menu/click"},
+        {"trigger", "/input/trigger/value"}, {"thumbstick", "/input/trackpad"},
+        {"menu", "/input/menu/click", Side::kLeft}, {"stick_click", "/input/trackpad/click", Side::kLeft},
+        {"pick", "/input/trackpad/click", Side::kRight}, {"finish", "/input/menu/click", Side::kRight},
         {"haptic", "/output/haptic"}}},
       {"/interaction_profiles/valve/index_controller",
        {{"grip", "/input/grip/pose"}, {"aim", "/input/aim/pose"}, {"grab", "/input/squeeze/value"},
-        {"trigger", "/input/trigger/value"}, {"thumbstick", "/input/thumbstick"}, {"menu", "/input/b/click"},
+        {"trigger", "/input/trigger/value"}, {"thumbstick", "/input/thumbstick"},
+        {"menu", "/input/b/click", Side::kLeft}, {"stick_click", "/input/thumbstick/click"},
+        {"pick", "/input/a/click", Side::kRight}, {"finish", "/input/b/click", Side::kRight},
         {"haptic", "/output/haptic"}}},
       {"/interaction_profiles/microsoft/motion_controller",
        {{"grip", "/input/grip/pose"}, {"aim", "/input/aim/pose"}, {"grab", "/input/squeeze/click"},
-        {"trigger", "/input/trigger/value"}, {"thumbstick", "/input/thumbstick"}, {"menu", "/input/menu/click"},
+        {"trigger", "/input/trigger/value"}, {"thumbstick", "/input/thumbstick"},
+        {"menu", "/input/menu/click", Side::kLeft}, {"stick_click", "/input/thumbstick/click"},
+        {"pick", "/input/trackpad/click", Side::kRight}, {"finish", "/input/menu/click", Side::kRight},
         {"haptic", "/output/haptic"}}},
   };
   return p;
@@ -72,6 +86,9 @@ Status XrActions::create(XrInstance instance, XrErrors& errors) {
       {&trigger_, "trigger", "Trigger", XR_ACTION_TYPE_FLOAT_INPUT},
       {&thumbstick_, "thumbstick", "Fly", XR_ACTION_TYPE_VECTOR2F_INPUT},
       {&menu_, "menu", "Menu", XR_ACTION_TYPE_BOOLEAN_INPUT},
+      {&stick_click_, "stick_click", "Teleport", XR_ACTION_TYPE_BOOLEAN_INPUT},
+      {&pick_, "pick", "Pick node", XR_ACTION_TYPE_BOOLEAN_INPUT},
+      {&finish_, "finish", "Finish branch", XR_ACTION_TYPE_BOOLEAN_INPUT},
       {&haptic_, "haptic", "Haptic pulse", XR_ACTION_TYPE_VIBRATION_OUTPUT},
   };
   for (const Def& d : defs) {
@@ -91,13 +108,16 @@ Status XrActions::create(XrInstance instance, XrErrors& errors) {
     if (n == "trigger") return trigger_;
     if (n == "thumbstick") return thumbstick_;
     if (n == "menu") return menu_;
+    if (n == "stick_click") return stick_click_;
+    if (n == "pick") return pick_;
+    if (n == "finish") return finish_;
     return haptic_;
   };
   for (const Profile& p : profiles()) {
     std::vector<XrActionSuggestedBinding> suggested;
     for (const Binding& b : p.bindings) {
       for (int h = 0; h < 2; ++h) {
-        if (b.left_only && h == kRight) continue;
+        if ((b.side == Side::kLeft && h == kRight) || (b.side == Side::kRight && h == kLeft)) continue;
         XrPath path = XR_NULL_PATH;
         const std::string full = std::string(h == kLeft ? "/user/hand/left" : "/user/hand/right") + b.path;
         VXR_XR_CALL(errors, xrStringToPath, (instance, full.c_str(), &path));
@@ -155,10 +175,17 @@ Status XrActions::read(XrSession session, XrSpace base, XrTime time, InputState&
     XrActionStateVector2f v{XR_TYPE_ACTION_STATE_VECTOR2F};
     VXR_XR_CALL(errors, xrGetActionStateVector2f, (session, &gi, &v));
     hand.thumbstick = v.isActive ? glm::dvec2(v.currentState.x, v.currentState.y) : glm::dvec2(0.0);
-    gi.action = menu_;
-    XrActionStateBoolean b{XR_TYPE_ACTION_STATE_BOOLEAN};
-    VXR_XR_CALL(errors, xrGetActionStateBoolean, (session, &gi, &b));
-    hand.menu = b.isActive && b.currentState;
+    auto button = [&](XrAction action, bool& out) -> Status {
+      gi.action = action;
+      XrActionStateBoolean b{XR_TYPE_ACTION_STATE_BOOLEAN};
+      VXR_XR_CALL(errors, xrGetActionStateBoolean, (session, &gi, &b));
+      out = b.isActive && b.currentState;
+      return Status::ok();
+    };
+    VXR_RETURN_IF_ERROR(button(menu_, hand.menu));
+    VXR_RETURN_IF_ERROR(button(stick_click_, hand.stick_click));
+    VXR_RETURN_IF_ERROR(button(pick_, hand.primary));
+    VXR_RETURN_IF_ERROR(button(finish_, hand.secondary));
     gi.action = grip_;
     XrActionStatePose p{XR_TYPE_ACTION_STATE_POSE};
     VXR_XR_CALL(errors, xrGetActionStatePose, (session, &gi, &p));

@@ -1,6 +1,7 @@
 // The OpenXR actions vxr reads and the bindings it suggests, one table per
-// controller family: grip pose, aim pose, grab, trigger, thumbstick, menu and
-// haptics, for each hand. The runtime picks the profile that matches the
+// controller family: grip pose, aim pose, grab, trigger, thumbstick, menu,
+// thumbstick click (teleport), pick and finish (the tracing tool's buttons)
+// and haptics, for each hand. The runtime picks the profile that matches the
 // controllers; the interaction code only ever sees InputState.
 #pragma once
 
@@ -31,7 +32,8 @@ class XrActions {
  private:
   XrActionSet set_ = XR_NULL_HANDLE;
   XrAction grip_ = XR_NULL_HANDLE, aim_ = XR_NULL_HANDLE, grab_ = XR_NULL_HANDLE, trigger_ = XR_NULL_HANDLE,
-           thumbstick_ = XR_NULL_HANDLE, menu_ = XR_NULL_HANDLE, haptic_ = XR_NULL_HANDLE;
+           thumbstick_ = XR_NULL_HANDLE, menu_ = XR_NULL_HANDLE, stick_click_ = XR_NULL_HANDLE, pick_ = XR_NULL_HANDLE,
+           finish_ = XR_NULL_HANDLE, haptic_ = XR_NULL_HANDLE;
   std::array<XrPath, 2> hands_{XR_NULL_PATH, XR_NULL_PATH};
   std::array<XrSpace, 2> grip_space_{XR_NULL_HANDLE, XR_NULL_HANDLE};
   std::array<XrSpace, 2> aim_space_{XR_NULL_HANDLE, XR_NULL_HANDLE};

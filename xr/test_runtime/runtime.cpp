@@ -100,7 +100,7 @@ struct Config {
   Script script;
   std::vector<FailSpec> fails;
   long loss_frame = -1;
-  bool no_headset = false, no_stage = false, no_depth = false;
+  bool no_headset = false, no_stage = false, no_depth = false, no_srgb = false;
   std::string profile;
   std::set<long> dump_frames;
   std::string dump_dir, report_path, call_log;
@@ -118,6 +118,7 @@ Config load_config() {
       if (j.contains("no_headset")) c.no_headset = j["no_headset"].get<bool>();
       if (j.contains("no_stage")) c.no_stage = j["no_stage"].get<bool>();
       if (j.contains("no_depth")) c.no_depth = j["no_depth"].get<bool>();
+      if (j.contains("no_srgb")) c.no_srgb = j["no_srgb"].get<bool>();
       if (j.contains("profile")) c.profile = j["profile"].get<std::string>();
       if (j.contains("dump_frames"))
         for (const auto& f : j["dump_frames"]) c.dump_frames.insert(f.get<long>());
@@ -902,9 +903,10 @@ XrResult xrLocateViews(XrSession session, const XrViewLocateInfo* li, XrViewStat
 XrResult xrEnumerateSwapchainFormats(XrSession session, uint32_t capacity, uint32_t* count, int64_t* formats) {
   RT_ENTER();
   if (!as_session(session)) return XR_ERROR_HANDLE_INVALID;
-  return two_call<int64_t>(capacity, count, formats,
-                           {VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_SRGB, VK_FORMAT_R8G8B8A8_UNORM,
-                            VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_D32_SFLOAT, VK_FORMAT_D16_UNORM});
+  std::vector<int64_t> offered = {VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_D32_SFLOAT,
+                                  VK_FORMAT_D16_UNORM};
+  if (!config().no_srgb) offered.insert(offered.begin(), {VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_SRGB});
+  return two_call<int64_t>(capacity, count, formats, offered);
 }
 
 XrResult xrCreateSwapchain(XrSession session, const XrSwapchainCreateInfo* ci, XrSwapchain* out) {
@@ -914,8 +916,9 @@ XrResult xrCreateSwapchain(XrSession session, const XrSwapchainCreateInfo* ci, X
   if (s->lost) return XR_ERROR_SESSION_LOST;
   const VkFormat format = VkFormat(ci->format);
   const bool depth = format == VK_FORMAT_D32_SFLOAT || format == VK_FORMAT_D16_UNORM;
-  if (!depth && format != VK_FORMAT_R8G8B8A8_SRGB && format != VK_FORMAT_B8G8R8A8_SRGB &&
-      format != VK_FORMAT_R8G8B8A8_UNORM && format != VK_FORMAT_B8G8R8A8_UNORM)
+  const bool srgb = format == VK_FORMAT_R8G8B8A8_SRGB || format == VK_FORMAT_B8G8R8A8_SRGB;
+  if (!depth && !(srgb && !config().no_srgb) && format != VK_FORMAT_R8G8B8A8_UNORM &&
+      format != VK_FORMAT_B8G8R8A8_UNORM)
     return XR_ERROR_SWAPCHAIN_FORMAT_UNSUPPORTED;
   if (ci->width == 0 || ci->height == 0 || ci->width > 4096 || ci->height > 4096 || ci->arraySize != 1 ||
       ci->faceCount != 1 || ci->mipCount != 1 || ci->sampleCount != 1)
@@ -1293,6 +1296,20 @@ struct Value {
   float x = 0, y = 0;
 };
 
+// The script's value for the physical control a binding path names (xr/script.h).
+// A Vive's trackpad is the script's thumbstick, its click "thumbstick_click".
+double control_value(const std::string& path, const ScriptHand& sh, bool trackpad_is_stick) {
+  auto is = [&](const char* control) { return path.rfind(control, 0) == 0; };
+  if (is("/input/squeeze") || is("/input/select")) return sh.squeeze;
+  if (is("/input/trigger")) return sh.trigger;
+  if (is("/input/thumbstick/click")) return sh.thumbstick_click ? 1.0 : 0.0;
+  if (is("/input/trackpad/click")) return (trackpad_is_stick ? sh.thumbstick_click : sh.trackpad_click) ? 1.0 : 0.0;
+  if (is("/input/menu/")) return sh.menu ? 1.0 : 0.0;
+  if (is("/input/a/") || is("/input/x/")) return sh.a ? 1.0 : 0.0;
+  if (is("/input/b/") || is("/input/y/")) return sh.b ? 1.0 : 0.0;
+  return 0.0;
+}
+
 Value read_value(Session* s, XrAction action, XrPath subaction) {
   Value v;
   const Action* a = reinterpret_cast<const Action*>(action);
@@ -1308,15 +1325,11 @@ Value read_value(Session* s, XrAction action, XrPath subaction) {
     const bool click = path.find("/click") != std::string::npos;
     auto as = [&](double value) { return float(click ? (value >= 0.5 ? 1.0 : 0.0) : value); };
     v.active = true;
-    if (path.find("/squeeze") != std::string::npos || path.find("/select") != std::string::npos) {
-      v.x = std::max(v.x, as(sh.squeeze));
-    } else if (path.find("/trigger") != std::string::npos) {
-      v.x = std::max(v.x, as(sh.trigger));
-    } else if (path.find("/thumbstick") != std::string::npos || path.find("/trackpad") != std::string::npos) {
+    if (path == "/input/thumbstick" || path == "/input/trackpad") {
       v.x = float(sh.thumbstick.x);
       v.y = float(sh.thumbstick.y);
-    } else if (path.find("/menu") != std::string::npos || path.find("/b/click") != std::string::npos) {
-      v.x = std::max(v.x, sh.menu ? 1.0f : 0.0f);
+    } else {
+      v.x = std::max(v.x, as(control_value(path, sh, s->profile == "/interaction_profiles/htc/vive_controller")));
     }
   }
   return v;

@@ -9,8 +9,10 @@
 // XR_KHR_composition_layer_depth, sessions with the full state machine,
 // reference and action spaces, swapchains backed by VkImages on the app's
 // device, the frame loop with deterministic display times (frame i is shown
-// at 1 s + i * 1/90 s), actions for the five controller profiles vxr binds,
-// and haptics (counted).
+// at 1 s + i * 1/90 s), actions for the five controller profiles vxr binds
+// (each action answers from the physical control its binding names:
+// squeeze, trigger, thumbstick, menu, thumbstick/trackpad click, a/x, b/y,
+// as the pose script's hands give them, xr/script.h), and haptics (counted).
 //
 // Driving it (environment):
 //   VXR_TEST_RUNTIME_SCRIPT=file.json  pose script (xr/script.h) plus:
@@ -19,6 +21,7 @@
 //       "no_headset": true           xrGetSystem -> XR_ERROR_FORM_FACTOR_UNAVAILABLE
 //       "no_stage": true             only LOCAL and VIEW reference spaces
 //       "no_depth": true             do not offer XR_KHR_composition_layer_depth
+//       "no_srgb": true              offer UNORM colour swapchains only (eye dumps hold the renderer's bytes)
 //       "profile": "/interaction_profiles/valve/index_controller"
 //       "dump_frames": [30]          write those frames' eye images as PNG
 //   VXR_TEST_RUNTIME_FAIL=function:k:XR_ERROR_...  fail the k-th call (1-based) of function
