@@ -76,9 +76,11 @@ std::array<double, 2> slider_range(const VolumeInfo& info, const RenderSettings&
 
 // The desktop viewer's setup: panels over the session's settings, the UI
 // script checked against them, the annotation store (--annotations or the project's) for the tools.
+// `pose`: a card's (or a --settings Scene's) camera, where the window starts.
 Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, const VolumeSession& session,
                                                             const xr::VolumeTransform& transform,
-                                                            const VolumePlacement& placement) {
+                                                            const VolumePlacement& placement,
+                                                            const std::optional<Scene>& pose) {
   auto setup = std::make_shared<xr::ViewerSetup>();
   const VolumeInfo& info = session.source->info();
   setup->dataset = o.sample || o.input.empty() ? std::string("sample (MRI head)")
@@ -96,6 +98,7 @@ Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, co
   setup->data_range = slider_range(info, session.settings);
   setup->placement = placement;
   setup->transform = transform;
+  if (pose) setup->start_orbit = xr::scene_orbit(*pose, placement);
   for (uint32_t c : session.channels) {
     auto histogram = xr::coarse_histogram(*session.source, c, session.timepoint, setup->data_range);
     if (!histogram) return histogram.status();
@@ -238,7 +241,7 @@ int run(const Options& given) {
                                   info.voxel_size};
   const xr::VolumeTransform start = xr::default_volume_transform(placement);
   if (!o.no_ui && o.movie.empty() && !o.force_xr && !o.force_headless) {
-    auto setup = viewer_setup(o, *session, start, placement);
+    auto setup = viewer_setup(o, *session, start, placement, pose);
     if (!setup) {
       const ErrorCode c = setup.status().code();
       return fail(setup.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage
@@ -270,9 +273,9 @@ int run(const Options& given) {
   std::printf("vxr view: %s\n", choice->reason.c_str());
   std::fflush(stdout);
 
-  if (!o.card.empty() && choice->kind != xr::TargetKind::kHeadless)
+  if (!o.card.empty() && choice->kind == xr::TargetKind::kOpenXr)
     std::fprintf(stderr, "vxr view: note: --card: settings, channels, timepoint and annotations restored; the card's "
-                         "camera is restored headless only (a headset or window keeps its own pose)\n");
+                         "camera is restored headless and in the window only (a headset keeps its own pose)\n");
 
   xr::ViewOptions vo;
   vo.frames = o.frames;
