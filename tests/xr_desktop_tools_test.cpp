@@ -326,19 +326,18 @@ TEST_CASE("desktop viewer: trace, track and ROI by mouse in a scripted session s
                    roi = png(shot("roi"));
   const auto green = [](const ImageRgba8& img, double x, double y) { return colour_near(img, x, y, 3, 0, 255, 0); };
   MESSAGE("green near the middle of A-B: before " << green(before, 220, 150) << ", traced " << green(traced, 220, 150));
-  CHECK(green(before, (ax + bx) / 2, (ay + by) / 2) == 0);
-  CHECK(green(traced, (ax + bx) / 2, (ay + by) / 2) >= 3);
-  CHECK(green(traced, (bx + cx) / 2, (by + cy) / 2) >= 3);
-  CHECK(green(traced, (ax + dx) / 2, (ay + dy) / 2) >= 3);
+  MESSAGE("magenta near the track's step: before " << magenta(before, 250, 180) << ", tracked " << magenta(tracked, 250, 180));
+  // A 2-pixel line through a 7 x 7 box: 7 pixels or more of it (the data may hold a few such pixels itself).
+  for (const auto& [x, y] : {std::pair{(ax + bx) / 2, (ay + by) / 2}, std::pair{(bx + cx) / 2, (by + cy) / 2},
+                             std::pair{(ax + dx) / 2, (ay + dy) / 2}})
+    CHECK_MESSAGE(green(traced, x, y) >= green(before, x, y) + 7, x << "," << y);
   const auto magenta = [](const ImageRgba8& img, double x, double y) { return colour_near(img, x, y, 3, 255, 0, 255); };
-  CHECK(magenta(before, (px + qx) / 2, (py + qy) / 2) == 0);
-  CHECK(magenta(tracked, (px + qx) / 2, (py + qy) / 2) >= 3);
+  CHECK(magenta(tracked, (px + qx) / 2, (py + qy) / 2) >= magenta(before, (px + qx) / 2, (py + qy) / 2) + 7);
   CHECK(colour_near(tracked, qx, qy, 4, 255, 255, 0) >= 20);  // the track's marker at the shown timepoint: a yellow disc
   const auto cyan = [](const ImageRgba8& img, double x, double y) { return colour_near(img, x, y, 4, 0, 255, 255); };
   for (const auto& [x, y] : {std::pair{250.0, 160.0}, std::pair{250.0, 230.0}, std::pair{170.0, 195.0},
                              std::pair{330.0, 195.0}}) {
-    CHECK_MESSAGE(cyan(before, x, y) == 0, x << "," << y);
-    CHECK_MESSAGE(cyan(roi, x, y) >= 3, x << "," << y);
+    CHECK_MESSAGE(cyan(roi, x, y) >= cyan(before, x, y) + 9, x << "," << y);  // a 9 x 9 box
   }
   // The panels came back over the same view.
   CHECK(differing(roi, png(shot("panel"))) > 1000);

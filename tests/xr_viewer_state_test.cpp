@@ -334,6 +334,8 @@ TEST_CASE("viewer keys: GLFW presses map to viewer keys, releases and repeats of
   CHECK(viewer_key_from_glfw(GLFW_KEY_LEFT_BRACKET, GLFW_PRESS) == ViewerKey::kSlower);
   CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_H, GLFW_REPEAT).has_value());
   CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_Z, GLFW_PRESS).has_value());
+  CHECK(viewer_key_from_glfw(GLFW_KEY_ENTER, GLFW_PRESS) == ViewerKey::kFinishTool);  // the tools' finish
+  CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_ENTER, GLFW_REPEAT).has_value());
 }
 
 namespace {

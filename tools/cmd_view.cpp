@@ -365,14 +365,16 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_flag("--no-ui", o->no_ui, "desktop: the bare window, without panels");
   cmd->add_option("--ui-script", o->ui_script,
                   "desktop: run this scripted session (JSON list of steps: viewer commands, play/pause, screenshot "
-                  "PATH, count, measure, tool, click, card; see xr/desktop/ui_script.h), then close");
+                  "PATH, count, measure, tool, click, drag, finish, remove, card, keyframe, export-movie; see "
+                  "xr/desktop/ui_script.h), then close");
   add_annotations_option(cmd, o->flags.annotations);
   cmd->add_option("--tool", o->tool, "the right trigger's starting tool (headset, pose script; the menu button cycles)")
       ->check(CLI::IsMember({"count", "measure", "trace", "track", "roi"}));
   cmd->add_option("--class", o->tool_class, "the class count markers get (default cell)");
   cmd->add_option("--card", o->card,
                   "STORE:ID (or ID of the --annotations store or the input project's): restore a card's volume, "
-                  "settings, channels, timepoint and annotations; headless, its exact camera and size too");
+                  "settings, channels, timepoint and annotations; its camera in the window, and headless its exact "
+                  "camera and size");
   add_session_flags(cmd, &o->flags);
   cmd->callback([&inv, o, cmd] {
     o->lod_bias_given = cmd->count("--lod-bias") > 0;

@@ -877,6 +877,8 @@ void DesktopTarget::draw_overlay_view(const WindowView& view) {
     }
     draw->AddCircleFilled(at, radius, colour(p.color));
     draw->AddCircle(at, radius + 1.0f, IM_COL32(0, 0, 0, 255), 0, 2.0f);  // readable on bright data too
+    if (live.roi && live.roi->contains(p.voxel))  // inside the box being dragged or last stored: a cyan ring
+      draw->AddCircle(at, radius + 4.0f, colour({0, 1, 1, 1}), 0, 2.0f);
   }
   draw->PopClipRect();
 }
@@ -1021,7 +1023,8 @@ Status DesktopTarget::record_after_views(VkCommandBuffer cmd, FrameSubmit& submi
     vkCmdBlitImage(cmd, e.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
                    &blit, VK_FILTER_LINEAR);
   }
-  if (movie_frame_pending_ && !nothing_visible_) VXR_RETURN_IF_ERROR(record_movie_copy(cmd));
+  movie_copied_ = movie_frame_pending_ && !nothing_visible_;
+  if (movie_copied_) VXR_RETURN_IF_ERROR(record_movie_copy(cmd));
   ui_->record(cmd, index);  // TRANSFER_DST -> panels drawn -> PRESENT_SRC
   if (!screenshot_pending_.empty()) {
     const VkDeviceSize bytes = VkDeviceSize(swap_extent_.width) * swap_extent_.height * 4;
@@ -1084,7 +1087,8 @@ Status DesktopTarget::write_movie_frame() {
   }
   const gpu::Image& eye = eyes_.front();
   ImageRgba8 img(eye.extent.width, eye.extent.height);  // the eyes are RGBA8 (sRGB-encoded on an sRGB window)
-  std::memcpy(img.pixels.data(), movie_buffer_.mapped, img.pixels.size());
+  if (movie_copied_)  // else every channel was hidden: a black frame, as the window showed
+    std::memcpy(img.pixels.data(), movie_buffer_.mapped, img.pixels.size());
   for (size_t i = 3; i < img.pixels.size(); i += 4) img.pixels[i] = 255;  // the window is opaque
   VXR_ASSIGN_OR_RETURN(std::string path, m->frame_path(m->next_frame()));
   VXR_RETURN_IF_ERROR(write_png(path, img));

@@ -198,6 +198,7 @@ class DesktopTarget : public FrameTarget {
   std::unique_ptr<MovieExport> export_;
   bool export_from_script_ = false;
   bool movie_frame_pending_ = false;
+  bool movie_copied_ = false;  // this frame's eye 0 went into movie_buffer_
   gpu::Buffer movie_buffer_;
   uint32_t drawn_timepoint_ = 0;          // the frame's (a screenshot's log line names it)
   std::vector<TimepointPrefetcher> prefetch_;  // playback: one per channel of the view, into run_view's cache

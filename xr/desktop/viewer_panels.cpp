@@ -79,9 +79,12 @@ void render_panel(ViewerState& state) {
 }
 
 void read_store(ViewerTools& tools, ToolPanel& panel, uint32_t timepoint) {
-  if (panel.read_revision == tools.revision() && panel.read_timepoint == timepoint) return;
+  if (panel.read_revision == tools.revision() && panel.read_timepoint == timepoint &&
+      panel.read_events == tools.events())
+    return;
   panel.read_revision = tools.revision();
   panel.read_timepoint = timepoint;
+  panel.read_events = tools.events();
   annotate::AnnotationStore& store = tools.store();
   auto counts = store.counts();
   auto measurements = store.measurements();

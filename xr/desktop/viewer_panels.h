@@ -39,6 +39,7 @@ struct ToolPanel {
   // The store as last read (again after each edit).
   uint64_t read_revision = UINT64_MAX;
   uint32_t read_timepoint = UINT32_MAX;
+  uint64_t read_events = UINT64_MAX;
   std::map<std::string, size_t> counts;
   std::vector<std::pair<std::string, double>> lengths;  // measurement label, length
   std::vector<annotate::Card> cards;                    // without media

@@ -20,6 +20,7 @@ std::array<double, 4> ViewerTools::class_colour(const std::string& cls) {
 
 Status ViewerTools::apply(annotate::Tool tool, annotate::ToolAction action, const annotate::Vec3& at,
                           uint32_t timepoint) {
+  ++events_;
   if (palette_->tool() != tool) palette_->select_tool(tool);
   return palette_->apply({action, at, timepoint});
 }
@@ -51,6 +52,7 @@ Status ViewerTools::measure_click(const annotate::Vec3& voxel, uint32_t timepoin
 
 Status ViewerTools::measure_hover(const annotate::Vec3& voxel, uint32_t timepoint) {
   if (palette_->tool() != annotate::Tool::kMeasure || !palette_->live().measuring) return Status::ok();
+  ++events_;
   return palette_->apply({annotate::ToolAction::kMove, voxel, timepoint});
 }
 
@@ -78,6 +80,7 @@ Status ViewerTools::apply_event(annotate::Tool tool, const std::string& cls, con
 
 void ViewerTools::cancel() {
   // Selecting a tool drops what the old one was drawing; nothing stored is lost.
+  ++events_;
   const annotate::Tool current = palette_->tool();
   palette_->select_tool(current == annotate::Tool::kCount ? annotate::Tool::kMeasure : annotate::Tool::kCount);
   palette_->select_tool(current);
@@ -97,10 +100,10 @@ Result<annotate::Id> ViewerTools::card(const Scene& scene, const std::string& ti
 
 Status ViewerTools::trace_click(const annotate::Vec3& voxel, uint32_t timepoint) {
   using annotate::Tool, annotate::ToolAction;
+  ++events_;
+  if (palette_->tool() != Tool::kTrace) palette_->select_tool(Tool::kTrace);
   // On a node of the skeleton being traced: continue from it (a pick stores nothing).
-  if (palette_->tool() == Tool::kTrace && palette_->live().skeleton != 0 &&
-      palette_->apply({ToolAction::kPick, voxel, timepoint}))
-    return Status::ok();
+  if (palette_->live().skeleton != 0 && palette_->apply({ToolAction::kPick, voxel, timepoint})) return Status::ok();
   VXR_RETURN_IF_ERROR(apply(Tool::kTrace, ToolAction::kPress, voxel, timepoint));
   ++revision_;
   return Status::ok();
@@ -117,6 +120,7 @@ Status ViewerTools::roi_drag(annotate::ToolAction action, const annotate::Vec3& 
 Status ViewerTools::finish(uint32_t timepoint) {
   const annotate::Tool tool = palette_->tool();
   if (tool != annotate::Tool::kTrace && tool != annotate::Tool::kTrack) return Status::ok();
+  ++events_;
   return palette_->apply({annotate::ToolAction::kFinish, {0, 0, 0}, timepoint});
 }
 
@@ -243,6 +247,7 @@ Status ViewerTools::remove(AnnotationKind kind, annotate::Id id) {
 }
 
 void ViewerTools::restart_palette() {
+  ++events_;
   const annotate::Tool tool = palette_->tool();
   palette_ = std::make_unique<annotate::ToolPalette>(store_);
   palette_->select_tool(tool);

@@ -54,6 +54,8 @@ class ViewerTools {
   const annotate::ToolPalette& palette() const { return *palette_; }
   // Bumped on every stored edit.
   uint64_t revision() const { return revision_; }
+  // Bumped on every event the tools take, stored or not (a pick, a move, finish): the live state may have changed.
+  uint64_t events() const { return events_; }
 
   // A count marker of `cls` (colour by the order classes first appear).
   Status count(const annotate::Vec3& voxel, const std::string& cls, uint32_t timepoint);
@@ -77,7 +79,10 @@ class ViewerTools {
   // palette switches to `tool` first; count markers get `cls`.
   Status apply_event(annotate::Tool tool, const std::string& cls, const annotate::ToolEvent& event);
   // Switches the palette's tool, dropping what the old one was drawing.
-  void select_tool(annotate::Tool tool) { palette_->select_tool(tool); }
+  void select_tool(annotate::Tool tool) {
+    ++events_;
+    palette_->select_tool(tool);
+  }
   // A card of `scene` with an optional PNG snapshot; returns its id.
   Result<annotate::Id> card(const Scene& scene, const std::string& title, const std::string& note,
                             std::vector<uint8_t> snapshot_png);
@@ -101,6 +106,7 @@ class ViewerTools {
   std::string cls_ = "default";       // the palette's class, kept across restart_palette
   std::vector<std::string> classes_;  // in order of first use
   uint64_t revision_ = 0;
+  uint64_t events_ = 0;
 };
 
 }  // namespace vxr::xr
