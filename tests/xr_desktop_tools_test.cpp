@@ -326,12 +326,12 @@ TEST_CASE("desktop viewer: trace, track and ROI by mouse in a scripted session s
                    roi = png(shot("roi"));
   const auto green = [](const ImageRgba8& img, double x, double y) { return colour_near(img, x, y, 3, 0, 255, 0); };
   MESSAGE("green near the middle of A-B: before " << green(before, 220, 150) << ", traced " << green(traced, 220, 150));
-  MESSAGE("magenta near the track's step: before " << magenta(before, 250, 180) << ", tracked " << magenta(tracked, 250, 180));
   // A 2-pixel line through a 7 x 7 box: 7 pixels or more of it (the data may hold a few such pixels itself).
   for (const auto& [x, y] : {std::pair{(ax + bx) / 2, (ay + by) / 2}, std::pair{(bx + cx) / 2, (by + cy) / 2},
                              std::pair{(ax + dx) / 2, (ay + dy) / 2}})
     CHECK_MESSAGE(green(traced, x, y) >= green(before, x, y) + 7, x << "," << y);
   const auto magenta = [](const ImageRgba8& img, double x, double y) { return colour_near(img, x, y, 3, 255, 0, 255); };
+  MESSAGE("magenta near the track's step: before " << magenta(before, 250, 180) << ", tracked " << magenta(tracked, 250, 180));
   CHECK(magenta(tracked, (px + qx) / 2, (py + qy) / 2) >= magenta(before, (px + qx) / 2, (py + qy) / 2) + 7);
   CHECK(colour_near(tracked, qx, qy, 4, 255, 255, 0) >= 20);  // the track's marker at the shown timepoint: a yellow disc
   const auto cyan = [](const ImageRgba8& img, double x, double y) { return colour_near(img, x, y, 4, 0, 255, 255); };
@@ -392,8 +392,9 @@ TEST_CASE("desktop viewer: vxr view --card and the panel's restore put the windo
   const std::string store_dir = dir + "/store";
   // A card as vxr render saves it (card 1), then the same scene seen after a grab: a camera in world
   // units and a volume transform (card 2).
+  REQUIRE(annotate::AnnotationStore::open(store_dir, true).is_ok());  // render --save-card adds to an existing store
   const test::ChildResult saved = test::run_child(std::string(VXR_BINARY) + " render " + kMri + " -o " + dir +
-                                                  "/a.png --width 64 --height 48 --save-card " + store_dir);
+                                                  "/a.png --size 64x48 --save-card " + store_dir);
   REQUIRE_MESSAGE(saved.exit_code == 0, saved.output);
   {
     auto store = annotate::AnnotationStore::open(store_dir, false);

@@ -354,6 +354,7 @@ void DesktopTarget::detach() {
   if (!ctx_) return;
   ui_.reset();  // its framebuffers and pipeline go before the device
   screenshot_buffer_ = {};
+  movie_buffer_ = {};
   destroy_swapchain();
   eyes_.clear();
   acquired_.reset();
