@@ -52,6 +52,18 @@ size_t colour_near(const ImageRgba8& img, double cx, double cy, int radius, uint
   return n;
 }
 
+// Pixels of exactly (r, g, b) on the ring r0..r1 pixels from (cx, cy).
+size_t colour_on_ring(const ImageRgba8& img, int cx, int cy, double r0, double r1, uint8_t r, uint8_t g, uint8_t b) {
+  size_t n = 0;
+  for (int y = cy - int(r1); y <= cy + int(r1); ++y)
+    for (int x = cx - int(r1); x <= cx + int(r1); ++x) {
+      const double d = std::hypot(x - cx, y - cy);
+      const uint8_t* p = img.at(uint32_t(x), uint32_t(y));
+      n += d >= r0 && d <= r1 && p[0] == r && p[1] == g && p[2] == b;
+    }
+  return n;
+}
+
 size_t differing(const ImageRgba8& a, const ImageRgba8& b) {
   size_t n = 0;
   for (size_t i = 0; i < a.pixels.size(); i += 4)
@@ -340,6 +352,10 @@ TEST_CASE("desktop viewer: trace, track and ROI by mouse in a scripted session s
                              std::pair{330.0, 195.0}}) {
     CHECK_MESSAGE(cyan(roi, x, y) >= cyan(before, x, y) + 9, x << "," << y);
   }
+  // The marker inside the box at the shown timepoint gets a cyan ring; the one of another timepoint does not.
+  CHECK(colour_on_ring(tracked, int(qx), int(qy), 8, 12, 0, 255, 255) == 0);
+  CHECK(colour_on_ring(roi, int(qx), int(qy), 8, 12, 0, 255, 255) >= 40);
+  CHECK(colour_on_ring(roi, int(px), int(py), 8, 12, 0, 255, 255) == 0);
   // The panels came back over the same view.
   CHECK(differing(roi, png(shot("panel"))) > 1000);
 }
