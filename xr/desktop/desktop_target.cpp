@@ -376,7 +376,8 @@ Result<FrameState> DesktopTarget::wait_frame() {
   }
   if (glfwGetKey(window_, GLFW_KEY_ESCAPE) == GLFW_PRESS) glfwSetWindowShouldClose(window_, GLFW_TRUE);
   if (state_) {
-    if (resized_) VXR_RETURN_IF_ERROR(follow_window_size());
+    // A movie keeps its frame size: the window follows a resize once the export is written.
+    if (resized_ && !export_) VXR_RETURN_IF_ERROR(follow_window_size());
     VXR_RETURN_IF_ERROR(viewer_frame(f));
     return f;
   }
@@ -705,7 +706,7 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
     if (movie_panel_->clear_keyframes) keyframes_.clear();
     if (movie_panel_->start_export) {
       export_from_script_ = false;
-      const Status s = start_movie_export({movie_panel_->output, uint64_t(movie_panel_->frames), 30.0});
+      const Status s = start_movie_export({movie_panel_->output, uint64_t(movie_panel_->frames), movie_panel_->fps});
       if (!s) movie_panel_->message = s.message();
     }
   }

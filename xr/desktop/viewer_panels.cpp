@@ -240,6 +240,8 @@ void draw_movie_panel(MoviePanel& panel) {
     ImGui::TextDisabled("NAME.mp4 (ffmpeg) or a folder for PNG frames");
     ImGui::InputInt("frames", &panel.frames);
     panel.frames = std::clamp(panel.frames, 2, 100000);
+    ImGui::InputFloat("fps", &panel.fps, 1.0f, 10.0f, "%.3g");
+    panel.fps = std::clamp(panel.fps, 0.1f, 1000.0f);
     if (panel.progress) {
       ImGui::ProgressBar(float(*panel.progress), ImVec2(-1, 0));
     } else {

@@ -51,6 +51,7 @@ struct ToolPanel {
 struct MoviePanel {
   char output[512] = "movie.mp4";
   int frames = 90;
+  float fps = 30.0f;               // an .mp4's frame rate
   size_t keyframes = 0;            // the window keeps them
   bool add_keyframe = false;       // set for one frame
   bool clear_keyframes = false;    // set for one frame
