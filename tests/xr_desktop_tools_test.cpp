@@ -198,6 +198,14 @@ TEST_CASE("viewer pick: a pixel and the voxel it shows map both ways, through ei
   const auto left = xr::voxel_under(views[0], t, placement, focus, 150, 100);
   const auto right = xr::voxel_under(views[1], t, placement, focus, 450, 100);
   CHECK(std::abs((*left)[0] - (*right)[0]) + std::abs((*left)[1] - (*right)[1]) + std::abs((*left)[2] - (*right)[2]) > 0.5);
+  // A click within a few pixels of where a voxel is drawn picks it, whatever its depth, in the eye clicked only.
+  const auto deep = xr::voxel_under(views[0], t, placement, glm::dvec3{5, 40, 1}, 60, 50);  // pixel (60, 50), deeper
+  REQUIRE(deep.has_value());
+  const std::vector<std::array<double, 3>> nodes{*deep, *left};
+  CHECK(xr::nearest_on_screen(views[0], t, placement, nodes, 63, 48, 8.0) == 0u);
+  CHECK(xr::nearest_on_screen(views[0], t, placement, nodes, 150, 100, 8.0) == 1u);
+  CHECK_FALSE(xr::nearest_on_screen(views[0], t, placement, nodes, 72, 50, 8.0).has_value());
+  CHECK_FALSE(xr::nearest_on_screen(views[1], t, placement, {*left}, 300 + 150, 100, 1.0).has_value());  // parallax
   // Looking mostly along the volume's -z: a dragged box spans z.
   const xr::Pose along_z{t.orientation, t.to_reference({0, 0, 300})};
   CHECK(xr::depth_axis({{along_z, fov, 300, 200}, 0.0}, t) == 2);

@@ -907,12 +907,28 @@ void DesktopTarget::on_viewer_click(double x, double y) {
   switch (panel_->mode) {
     case ToolPanel::Mode::kCount: s = tools_->count(at, panel_->cls, t); break;
     case ToolPanel::Mode::kMeasure: s = tools_->measure_click(at, t); break;
-    case ToolPanel::Mode::kTrace: s = tools_->trace_click(at, t); break;
+    case ToolPanel::Mode::kTrace: s = tools_->trace_click(traced_node_under(x, y).value_or(at), t); break;
     case ToolPanel::Mode::kTrack: s = tools_->track_click(at, panel_->cls, t); break;
     default: break;
   }
   panel_->message = s ? tools_->palette().live().last_edit : s.message();
   if (!s) click_error_ = "click: " + s.message();
+}
+
+// The node of the skeleton being traced drawn within a few pixels of (x, y): clicking it continues from it.
+std::optional<annotate::Vec3> DesktopTarget::traced_node_under(double x, double y) const {
+  const annotate::Id skeleton = tools_->palette().live().skeleton;
+  if (skeleton == 0) return std::nullopt;
+  auto sk = tools_->store().skeleton(skeleton);
+  if (!sk) return std::nullopt;  // the click adds a node, which reports the store's problem
+  std::vector<std::array<double, 3>> positions;
+  for (const auto& [id, n] : sk->nodes()) positions.push_back(n.pos);
+  const std::vector<WindowView> views = viewer_window_views();
+  const std::optional<size_t> v = view_at(views, x);
+  if (!v) return std::nullopt;
+  const auto hit = nearest_on_screen(views[*v], o_.viewer->transform, o_.viewer->placement, positions, x, y, 8.0);
+  if (!hit) return std::nullopt;
+  return positions[*hit];
 }
 
 void DesktopTarget::on_roi_drag(int action_code, double x, double y) {

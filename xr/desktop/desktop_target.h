@@ -133,6 +133,7 @@ class DesktopTarget : public FrameTarget {
   void on_roi_drag(int action, double x, double y);
   // The voxel under window pixel (x, y) on the plane through the orbit centre facing the view clicked.
   std::optional<std::array<double, 3>> voxel_under(double x, double y) const;
+  std::optional<std::array<double, 3>> traced_node_under(double x, double y) const;
   void finish_tool();
   void remove_annotation(AnnotationKind kind, uint64_t id);
   void add_keyframe();

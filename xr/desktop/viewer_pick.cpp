@@ -71,6 +71,23 @@ std::optional<std::array<double, 2>> project_voxel(const WindowView& v, const Vo
   return std::array<double, 2>{v.x0 + u * v.view.width, w * v.view.height};
 }
 
+std::optional<size_t> nearest_on_screen(const WindowView& v, const VolumeTransform& t, const VolumePlacement& placement,
+                                        const std::vector<std::array<double, 3>>& voxels, double x, double y,
+                                        double radius_px) {
+  std::optional<size_t> best;
+  double best_d = radius_px;
+  for (size_t i = 0; i < voxels.size(); ++i) {
+    const auto p = project_voxel(v, t, placement, voxels[i]);
+    if (!p || (*p)[0] < v.x0 || (*p)[0] >= v.x0 + v.view.width) continue;  // behind the eye or in the other eye
+    const double d = std::hypot((*p)[0] - x, (*p)[1] - y);
+    if (d <= best_d) {
+      best = i;
+      best_d = d;
+    }
+  }
+  return best;
+}
+
 int depth_axis(const WindowView& v, const VolumeTransform& t) {
   const glm::dvec3 f = axes_of(v, t).forward;
   int axis = 0;

@@ -35,6 +35,12 @@ std::optional<std::array<double, 2>> project_voxel(const WindowView& v, const Vo
                                                    const VolumePlacement& placement,
                                                    const std::array<double, 3>& voxel);
 
+// Of `voxels`, the one drawn nearest window pixel (x, y), if within
+// `radius_px` pixels: a click on a drawn node picks it whatever its depth.
+std::optional<size_t> nearest_on_screen(const WindowView& v, const VolumeTransform& t, const VolumePlacement& placement,
+                                        const std::vector<std::array<double, 3>>& voxels, double x, double y,
+                                        double radius_px);
+
 // The volume axis (0, 1, 2) nearest the view's direction: a box dragged on
 // the screen spans the whole volume along it.
 int depth_axis(const WindowView& v, const VolumeTransform& t);
