@@ -12,6 +12,7 @@
 
 #include <imgui.h>
 
+#include "annotate/annotation_store.h"
 #include "xr/desktop/viewer_keys.h"
 #include "xr/desktop/viewer_panels.h"
 #include "xr/desktop/viewer_state.h"
@@ -334,6 +335,8 @@ TEST_CASE("viewer keys: GLFW presses map to viewer keys, releases and repeats of
   CHECK(viewer_key_from_glfw(GLFW_KEY_LEFT_BRACKET, GLFW_PRESS) == ViewerKey::kSlower);
   CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_H, GLFW_REPEAT).has_value());
   CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_Z, GLFW_PRESS).has_value());
+  CHECK(viewer_key_from_glfw(GLFW_KEY_ENTER, GLFW_PRESS) == ViewerKey::kFinishTool);  // the tools' finish
+  CHECK_FALSE(viewer_key_from_glfw(GLFW_KEY_ENTER, GLFW_REPEAT).has_value());
 }
 
 namespace {
@@ -372,4 +375,63 @@ TEST_CASE("viewer panels: draw without touching the state, the help panel adds, 
   CHECK(panel_vertices(v) == 0);
   ImGui::DestroyContext(ctx);
   CHECK(viewer_window_title("head.zarr", 12.345) == "vxr - head.zarr - 12.3 ms");
+}
+
+TEST_CASE("tools panel: the live trace, track and box follow every tool event, stored or not, and the list every annotation") {
+  const std::filesystem::path dir = std::filesystem::path(VXR_TEST_OUT_DIR) / "xr" / "tools_panel";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  auto store = annotate::AnnotationStore::open((dir / "store").string(), true);
+  REQUIRE(store.is_ok());
+  ViewerTools tools(**store);
+  ToolPanel panel;
+  ImGuiContext* ctx = ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;
+  auto frame = [&](uint32_t timepoint) {
+    ImGuiIO& io = ImGui::GetIO();
+    io.DisplaySize = ImVec2(1280, 800);
+    io.DeltaTime = 1.0f / 60;
+    unsigned char* pixels = nullptr;
+    int w = 0, h = 0;
+    io.Fonts->GetTexDataAsRGBA32(&pixels, &w, &h);
+    ImGui::NewFrame();
+    ImGui::SetWindowCollapsed("Tools and cards", false);  // the user opened it
+    draw_tools_panel(tools, panel, timepoint);
+    ImGui::Render();
+    return ImGui::GetDrawData()->TotalVtxCount;
+  };
+  panel.mode = ToolPanel::Mode::kTrace;
+  frame(0);
+  const int empty = frame(0);
+  REQUIRE(tools.trace_click({10, 10, 1}, 0).is_ok());
+  REQUIRE(tools.trace_click({30, 10, 1}, 0).is_ok());
+  CHECK(frame(0) > empty);
+  CHECK(panel.status.nodes == 2);
+  CHECK(panel.status.traced_length == doctest::Approx(20.0));
+  CHECK(panel.status.current_node != annotate::kNoParent);
+  REQUIRE(tools.finish(0).is_ok());  // stores nothing: the panel still shows it
+  frame(0);
+  CHECK(panel.status.current_node == annotate::kNoParent);
+  REQUIRE(tools.track_click({5, 5, 1}, "cell", 0).is_ok());
+  REQUIRE(tools.track_click({6, 5, 1}, "cell", 2).is_ok());
+  REQUIRE(tools.roi_drag(annotate::ToolAction::kPress, {0, 0, 0}, 2).is_ok());
+  REQUIRE(tools.roi_drag(annotate::ToolAction::kMove, {8, 8, 2}, 2).is_ok());  // being dragged, not stored
+  panel.mode = ToolPanel::Mode::kRoi;
+  frame(2);
+  REQUIRE(panel.status.roi.has_value());
+  CHECK(panel.status.roi->id == 0);
+  CHECK(panel.status.roi_markers == 1);
+  CHECK(panel.status.track_markers == 2);
+  CHECK(panel.status.last_timepoint == 2);
+  size_t markers = 0, skeletons = 0, tracks = 0;
+  for (const AnnotationRow& r : panel.rows) {
+    markers += r.kind == AnnotationKind::kMarker;
+    skeletons += r.kind == AnnotationKind::kSkeleton;
+    tracks += r.kind == AnnotationKind::kTrack;
+  }
+  CHECK(markers == 2);
+  CHECK(skeletons == 1);
+  CHECK(tracks == 1);
+  CHECK_FALSE(panel.remove.has_value());  // nothing pressed
+  ImGui::DestroyContext(ctx);
 }

@@ -76,9 +76,11 @@ std::array<double, 2> slider_range(const VolumeInfo& info, const RenderSettings&
 
 // The desktop viewer's setup: panels over the session's settings, the UI
 // script checked against them, the annotation store (--annotations or the project's) for the tools.
+// `pose`: a card's (or a --settings Scene's) camera, where the window starts.
 Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, const VolumeSession& session,
                                                             const xr::VolumeTransform& transform,
-                                                            const VolumePlacement& placement) {
+                                                            const VolumePlacement& placement,
+                                                            const std::optional<Scene>& pose) {
   auto setup = std::make_shared<xr::ViewerSetup>();
   const VolumeInfo& info = session.source->info();
   setup->dataset = o.sample || o.input.empty() ? std::string("sample (MRI head)")
@@ -96,6 +98,7 @@ Result<std::shared_ptr<const xr::ViewerSetup>> viewer_setup(const Options& o, co
   setup->data_range = slider_range(info, session.settings);
   setup->placement = placement;
   setup->transform = transform;
+  if (pose) setup->start_orbit = xr::scene_orbit(*pose, placement);
   for (uint32_t c : session.channels) {
     auto histogram = xr::coarse_histogram(*session.source, c, session.timepoint, setup->data_range);
     if (!histogram) return histogram.status();
@@ -238,7 +241,7 @@ int run(const Options& given) {
                                   info.voxel_size};
   const xr::VolumeTransform start = xr::default_volume_transform(placement);
   if (!o.no_ui && o.movie.empty() && !o.force_xr && !o.force_headless) {
-    auto setup = viewer_setup(o, *session, start, placement);
+    auto setup = viewer_setup(o, *session, start, placement, pose);
     if (!setup) {
       const ErrorCode c = setup.status().code();
       return fail(setup.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage
@@ -269,10 +272,6 @@ int run(const Options& given) {
   if (!choice) return fail(choice.status(), kExitFailure);
   std::printf("vxr view: %s\n", choice->reason.c_str());
   std::fflush(stdout);
-
-  if (!o.card.empty() && choice->kind == xr::TargetKind::kDesktop)
-    std::fprintf(stderr, "vxr view: note: --card: settings, channels, timepoint and annotations restored; the card's "
-                         "camera is restored headless and in a headset only (a window keeps its own camera)\n");
 
   xr::ViewOptions vo;
   vo.frames = o.frames;
@@ -365,15 +364,17 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_flag("--no-ui", o->no_ui, "desktop: the bare window, without panels");
   cmd->add_option("--ui-script", o->ui_script,
                   "desktop: run this scripted session (JSON list of steps: viewer commands, play/pause, screenshot "
-                  "PATH, count, measure, tool, click, card; see xr/desktop/ui_script.h), then close");
+                  "PATH, count, measure, tool, click, drag, finish, remove, card, keyframe, export-movie; see "
+                  "xr/desktop/ui_script.h), then close");
   add_annotations_option(cmd, o->flags.annotations);
   cmd->add_option("--tool", o->tool, "the right trigger's starting tool (headset, pose script; the menu button cycles)")
       ->check(CLI::IsMember({"count", "measure", "trace", "track", "roi"}));
   cmd->add_option("--class", o->tool_class, "the class count markers get (default cell)");
   cmd->add_option("--card", o->card,
                   "STORE:ID (or ID of the --annotations store or the input project's): restore a card's volume, "
-                  "settings, channels, timepoint and annotations; headless, its exact camera and size too; in a "
-                  "headset, the volume placed so the first frame's head pose is the card's camera");
+                  "settings, channels, timepoint and annotations; its camera: headless exactly (and its size), "
+                  "in the window as an orbit, in a headset by placing the volume so the first frame's head "
+                  "pose is the card's camera");
   add_session_flags(cmd, &o->flags);
   cmd->callback([&inv, o, cmd] {
     o->lod_bias_given = cmd->count("--lod-bias") > 0;

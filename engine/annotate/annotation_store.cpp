@@ -577,6 +577,22 @@ Status AnnotationStore::add_to_track(Id track_id, Id marker_id) {
   return write(&batch);
 }
 
+Status AnnotationStore::delete_track(Id id) {
+  VXR_ASSIGN_OR_RETURN(Track gone, track(id));
+  VXR_ASSIGN_OR_RETURN(std::vector<Track> all, tracks());
+  leveldb::WriteBatch batch;
+  batch.Delete(track_key(id));
+  for (Id m : gone.markers) batch.Delete(marker_key(m));
+  // Another track holding one of those markers leaves it, as delete_marker does.
+  for (Track t : all) {
+    if (t.id == id) continue;
+    const size_t before = t.markers.size();
+    std::erase_if(t.markers, [&](Id m) { return std::find(gone.markers.begin(), gone.markers.end(), m) != gone.markers.end(); });
+    if (t.markers.size() != before) batch.Put(track_key(t.id), track_json(t).dump());
+  }
+  return write(&batch);
+}
+
 Result<Track> AnnotationStore::track(Id id) const {
   VXR_ASSIGN_OR_RETURN(std::optional<std::string> v, get(track_key(id)));
   if (!v) return not_there("track", id);

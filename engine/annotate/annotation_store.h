@@ -96,6 +96,8 @@ class AnnotationStore {
   // Tracks: a feature's markers across timepoints, one per timepoint.
   Result<Id> add_track(const std::string& name, const std::vector<Id>& markers);
   Status add_to_track(Id track, Id marker);
+  // Deletes the track and its markers (they were placed for it), in one batch.
+  Status delete_track(Id id);
   Result<Track> track(Id id) const;
   Result<std::vector<Track>> tracks() const;
 

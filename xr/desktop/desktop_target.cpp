@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <glm/gtc/quaternion.hpp>
 #include <fstream>
 #include <iterator>
@@ -29,6 +30,7 @@
 #include "gpu/vk_check.h"
 #include "xr/desktop/imgui_layer.h"
 #include "xr/desktop/viewer_keys.h"
+#include "xr/desktop/viewer_movie.h"
 #include "xr/desktop/viewer_panels.h"
 #include "xr/desktop/viewer_setup.h"
 #include "xr/desktop/viewer_tools.h"
@@ -86,17 +88,22 @@ Result<std::unique_ptr<DesktopTarget>> DesktopTarget::create(const DesktopOption
     g_last_x = x;
     g_last_y = y;
   });
-  // A click (press and release within a few pixels, not on a panel) places with the tools panel's tool.
+  // A click (press and release within a few pixels, not on a panel) places with the tools panel's tool;
+  // with the ROI tool a drag draws the box.
   glfwSetMouseButtonCallback(t->window_, [](GLFWwindow* win, int button, int action, int) {
     DesktopTarget* target = self(win);
     if (!target->tools_ || button != GLFW_MOUSE_BUTTON_LEFT) return;
     double x = 0, y = 0;
     glfwGetCursorPos(win, &x, &y);
+    const bool roi = target->panel_->mode == ToolPanel::Mode::kRoi;
     if (action == GLFW_PRESS) {
       target->press_x_ = x;
       target->press_y_ = y;
       target->press_on_ui_ = ImGuiLayer::wants_mouse();
-    } else if (action == GLFW_RELEASE && !target->press_on_ui_ &&
+      if (roi && !target->press_on_ui_) target->on_roi_drag(int(annotate::ToolAction::kPress), x, y);
+    } else if (action == GLFW_RELEASE && target->roi_dragging_) {
+      target->on_roi_drag(int(annotate::ToolAction::kRelease), x, y);
+    } else if (action == GLFW_RELEASE && !roi && !target->press_on_ui_ &&
                std::hypot(x - target->press_x_, y - target->press_y_) < 4.0) {
       target->on_viewer_click(x, y);
     }
@@ -107,7 +114,9 @@ Result<std::unique_ptr<DesktopTarget>> DesktopTarget::create(const DesktopOption
     const std::optional<ViewerKey> k = viewer_key_from_glfw(key, action);
     if (k == ViewerKey::kQuit) glfwSetWindowShouldClose(win, GLFW_TRUE);
     DesktopTarget* target = self(win);
-    if (k && target->state_ && !ImGuiLayer::wants_keyboard()) target->state_->handle_key(*k);
+    if (!k || !target->state_ || ImGuiLayer::wants_keyboard()) return;
+    target->state_->handle_key(*k);
+    if (k == ViewerKey::kFinishTool && target->tools_) target->finish_tool();
   });
   glfwSetFramebufferSizeCallback(t->window_, [](GLFWwindow* win, int, int) { self(win)->resized_ = true; });
   if (t->state_) glfwSetWindowTitle(t->window_, viewer_window_title(o.viewer->dataset, 0.0).c_str());
@@ -121,6 +130,12 @@ DesktopTarget::DesktopTarget(const DesktopOptions& o) : o_(o) {
       tools_ = std::make_unique<ViewerTools>(*o_.viewer->store);
       panel_ = std::make_unique<ToolPanel>();
     }
+    movie_panel_ = std::make_unique<MoviePanel>();
+    // `vxr view --card ID`: the window starts at the card's camera.
+    if (o_.viewer->start_orbit) {
+      const Status s = state_->restore(state_->render(), state_->scene().timepoint, *o_.viewer->start_orbit);
+      if (!s) log_warn("viewer: the card's camera: " + s.message());
+    }
     if (o_.viewer->script)
       script_ = std::make_unique<UiScriptRunner>(*o_.viewer->script, tools_.get(),
                                                  [this](const ViewerState&) { return card_scene(); });
@@ -128,12 +143,17 @@ DesktopTarget::DesktopTarget(const DesktopOptions& o) : o_(o) {
 }
 
 void DesktopTarget::on_viewer_cursor(double dx, double dy) {
+  double x = 0, y = 0;
+  glfwGetCursorPos(window_, &x, &y);
+  if (roi_dragging_) {  // the box follows the cursor; the view stays
+    on_roi_drag(int(annotate::ToolAction::kMove), x, y);
+    return;
+  }
   if (ImGuiLayer::wants_mouse()) return;
-  if (tools_ && panel_->mode == ToolPanel::Mode::kMeasure && !o_.stereo) {
+  if (tools_ && panel_->mode == ToolPanel::Mode::kMeasure) {
     // The measurement being drawn follows the cursor.
-    double x = 0, y = 0;
-    glfwGetCursorPos(window_, &x, &y);
-    if (Status s = tools_->measure_hover(voxel_under(x, y), state_->scene().timepoint); !s) panel_->message = s.message();
+    if (const auto v = voxel_under(x, y))
+      if (Status s = tools_->measure_hover(*v, state_->scene().timepoint); !s) panel_->message = s.message();
   }
   if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS)
     state_->orbit_drag(dx, dy);
@@ -334,6 +354,7 @@ void DesktopTarget::detach() {
   if (!ctx_) return;
   ui_.reset();  // its framebuffers and pipeline go before the device
   screenshot_buffer_ = {};
+  movie_buffer_ = {};
   destroy_swapchain();
   eyes_.clear();
   acquired_.reset();
@@ -355,7 +376,8 @@ Result<FrameState> DesktopTarget::wait_frame() {
   }
   if (glfwGetKey(window_, GLFW_KEY_ESCAPE) == GLFW_PRESS) glfwSetWindowShouldClose(window_, GLFW_TRUE);
   if (state_) {
-    if (resized_) VXR_RETURN_IF_ERROR(follow_window_size());
+    // A movie keeps its frame size: the window follows a resize once the export is written.
+    if (resized_ && !export_) VXR_RETURN_IF_ERROR(follow_window_size());
     VXR_RETURN_IF_ERROR(viewer_frame(f));
     return f;
   }
@@ -398,6 +420,12 @@ Status DesktopTarget::end_frame(const FrameState& frame, const FrameContent& con
     if (!image_acquired_) return Status::ok();
     image_acquired_ = false;
     if (!screenshot_pending_.empty()) VXR_RETURN_IF_ERROR(write_screenshot());
+    if (movie_frame_pending_) {
+      movie_frame_pending_ = false;
+      const Status s = write_movie_frame();
+      if (!s && export_from_script_) return s;
+      if (!s) movie_panel_->message = s.message();
+    }
     if (!card_shot_.empty()) {
       if (Status s = save_panel_card(card_shot_); !s) panel_->message = s.message();
       card_shot_.clear();
@@ -576,6 +604,67 @@ Pose pose_for_camera(const CameraState& c, const VolumeTransform& t) {
 
 }  // namespace
 
+// The script's steps due this frame, acted on as the panels' buttons and the mouse would.
+Status DesktopTarget::script_frame(FrameState& f, bool* card, std::optional<uint64_t>* restore) {
+  const std::string& path = o_.viewer->script->path;
+  click_error_.clear();
+  VXR_ASSIGN_OR_RETURN(UiScriptRunner::FrameWork work, script_->before_frame(*state_));
+  if (work.done) {
+    f.exit = true;
+    return Status::ok();
+  }
+  screenshot_pending_ = work.screenshot;
+  // Takes effect when the X server says so: the framebuffer callback, then follow_window_size().
+  if (work.resize[0] > 0) glfwSetWindowSize(window_, work.resize[0], work.resize[1]);
+  if (!work.tool.empty()) {
+    const std::string name = work.tool.substr(0, work.tool.find(' '));
+    static const std::pair<const char*, ToolPanel::Mode> modes[] = {
+        {"navigate", ToolPanel::Mode::kNavigate}, {"count", ToolPanel::Mode::kCount}, {"measure", ToolPanel::Mode::kMeasure},
+        {"trace", ToolPanel::Mode::kTrace},       {"track", ToolPanel::Mode::kTrack}, {"roi", ToolPanel::Mode::kRoi}};
+    tools_->cancel();
+    for (const auto& [n, mode] : modes)
+      if (name == n) panel_->mode = mode;
+    if (name == "count" || name == "track")
+      std::snprintf(panel_->cls, sizeof panel_->cls, "%s", work.tool.substr(name.size() + 1).c_str());
+  }
+  if (work.panel_card) std::snprintf(panel_->card_title, sizeof panel_->card_title, "%s", work.panel_card->c_str());
+  *card = work.panel_card.has_value();
+  *restore = work.restore_card;
+  if (work.finish) finish_tool();
+  if (work.remove) remove_annotation(work.remove->first, work.remove->second);
+  if (work.keyframe) add_keyframe();
+  if (work.export_movie) {
+    export_from_script_ = true;
+    if (Status s = start_movie_export(*work.export_movie); !s) return invalid_argument(path + ": export-movie: " + s.message());
+  }
+  if (work.click) on_viewer_click((*work.click)[0], (*work.click)[1]);
+  if (work.drag) {  // press, a move half way, release: as the mouse sends them
+    const auto& d = *work.drag;
+    on_roi_drag(int(annotate::ToolAction::kPress), d[0], d[1]);
+    if (click_error_.empty()) on_roi_drag(int(annotate::ToolAction::kMove), 0.5 * (d[0] + d[2]), 0.5 * (d[1] + d[3]));
+    if (click_error_.empty()) on_roi_drag(int(annotate::ToolAction::kRelease), d[2], d[3]);
+  }
+  // A script stops at the first refused click, drag, finish or remove, as at any refused step.
+  if (!click_error_.empty()) return invalid_argument(path + ": " + click_error_);
+  return Status::ok();
+}
+
+Fov DesktopTarget::viewer_fov() const {
+  const double ty = std::tan(state_->orbit().fov_y_deg * 3.14159265358979323846 / 360.0);
+  const double tx = ty * double(o_.width) / double(o_.height);
+  return Fov{-std::atan(tx), std::atan(tx), std::atan(ty), -std::atan(ty)};
+}
+
+std::vector<WindowView> DesktopTarget::viewer_window_views() const {
+  const Pose head = pose_for_camera(viewer_world_camera(*state_, o_.viewer->placement), o_.viewer->transform);
+  const Fov fov = viewer_fov();
+  if (!o_.stereo) return {WindowView{ViewSpec{head, fov, o_.width, o_.height}, 0.0}};
+  std::vector<WindowView> views;
+  for (const ViewSpec& eye : stereo_views(head, o_.ipd_m, fov, o_.width, o_.height))
+    views.push_back({eye, double(views.size() * o_.width)});
+  return views;
+}
+
 Status DesktopTarget::viewer_frame(FrameState& f) {
   const ViewerSetup& setup = *o_.viewer;
   const auto now = std::chrono::steady_clock::now();
@@ -592,38 +681,16 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
                });
   bool script_card = false;  // the script pressed the tools panel's buttons
   std::optional<uint64_t> script_restore;
-  if (script_) {
-    VXR_ASSIGN_OR_RETURN(UiScriptRunner::FrameWork work, script_->before_frame(*state_));
-    if (work.done) {
-      f.exit = true;
-      return Status::ok();
-    }
-    screenshot_pending_ = work.screenshot;
-    // Takes effect when the X server says so: the framebuffer callback, then follow_window_size().
-    if (work.resize[0] > 0) glfwSetWindowSize(window_, work.resize[0], work.resize[1]);
-    if (!work.tool.empty()) {
-      const std::string name = work.tool.substr(0, work.tool.find(' '));
-      tools_->cancel();
-      panel_->mode = name == "count"     ? ToolPanel::Mode::kCount
-                     : name == "measure" ? ToolPanel::Mode::kMeasure
-                                         : ToolPanel::Mode::kNavigate;
-      if (name == "count") std::snprintf(panel_->cls, sizeof panel_->cls, "%s", work.tool.substr(6).c_str());
-    }
-    if (work.panel_card) std::snprintf(panel_->card_title, sizeof panel_->card_title, "%s", work.panel_card->c_str());
-    script_card = work.panel_card.has_value();
-    script_restore = work.restore_card;
-    if (work.click) {
-      on_viewer_click((*work.click)[0], (*work.click)[1]);
-      // A script stops at the first refused click, as at any refused step.
-      if (!click_error_.empty()) return invalid_argument(o_.viewer->script->path + ": click: " + click_error_);
-    }
+  if (script_ && !export_) {  // a movie being exported holds the script until it is written
+    VXR_RETURN_IF_ERROR(script_frame(f, &script_card, &script_restore));
+    if (f.exit) return Status::ok();
   }
   if (state_->quit_requested()) glfwSetWindowShouldClose(window_, GLFW_TRUE);
-  glfwSetWindowTitle(window_, viewer_window_title(setup.dataset, frame_ms_).c_str());
-
-  const double ty = std::tan(state_->orbit().fov_y_deg * 3.14159265358979323846 / 360.0);
-  const double tx = ty * double(o_.width) / double(o_.height);
-  const Fov fov{-std::atan(tx), std::atan(tx), std::atan(ty), -std::atan(ty)};
+  glfwSetWindowTitle(window_, (viewer_window_title(setup.dataset, frame_ms_) +
+                               (export_ ? " - movie frame " + std::to_string(export_->next_frame() + 1) + "/" +
+                                              std::to_string(export_->request().frames)
+                                        : std::string()))
+                                  .c_str());
 
   ui_->begin();
   PanelInputs in;
@@ -631,13 +698,29 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   in.frame_ms = frame_ms_;
   in.histograms = setup.histograms;
   draw_viewer_panels(*state_, in);
+  if (state_->ui_visible()) {
+    movie_panel_->keyframes = keyframes_.size();
+    movie_panel_->progress = export_ ? std::optional<double>(export_->progress()) : std::nullopt;
+    draw_movie_panel(*movie_panel_);
+    if (movie_panel_->add_keyframe) add_keyframe();
+    if (movie_panel_->clear_keyframes) keyframes_.clear();
+    if (movie_panel_->start_export) {
+      export_from_script_ = false;
+      const Status s = start_movie_export({movie_panel_->output, uint64_t(movie_panel_->frames), movie_panel_->fps});
+      if (!s) movie_panel_->message = s.message();
+    }
+  }
   if (tools_) {
     if (state_->ui_visible()) {
-      draw_tools_panel(*tools_, *panel_);  // sets save_card / restore from its buttons
+      draw_tools_panel(*tools_, *panel_, state_->scene().timepoint);  // sets save_card / restore / finish / remove
     } else {
       panel_->save_card = false;
       panel_->restore.reset();
+      panel_->finish = false;
+      panel_->remove.reset();
     }
+    if (panel_->finish) finish_tool();
+    if (panel_->remove) remove_annotation(panel_->remove->first, panel_->remove->second);
     if (script_card) panel_->save_card = true;
     if (script_restore) panel_->restore = script_restore;
     if (panel_->restore) {
@@ -660,9 +743,13 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
     }
   }
   // The camera after this frame's edits (panels, keys, script), so a change shows in the frame that made it.
-  const Pose head = pose_for_camera(viewer_world_camera(*state_, setup.placement), setup.transform);
-  const ViewSpec mono{head, fov, o_.width, o_.height};
-  if (!o_.stereo) draw_annotation_overlay(mono);
+  std::vector<WindowView> views = viewer_window_views();
+  movie_frame_pending_ = export_ != nullptr;
+  if (export_) {  // the movie's camera instead of the orbit: one view, eye 0 read back
+    views = {WindowView{ViewSpec{export_->pose(export_->next_frame()), viewer_fov(), o_.width, o_.height}, 0.0}};
+  } else {
+    draw_annotation_overlay(views);
+  }
   ui_->end();
 
   // Every channel hidden: nothing to cast; record_after_views clears the window instead.
@@ -678,96 +765,224 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   f.should_render = true;
   f.display_time_ns = int64_t(frame_) * 16666667;
   if (!nothing_visible_)
-    f.views = o_.stereo ? stereo_views(head, o_.ipd_m, fov, o_.width, o_.height) : std::vector<ViewSpec>{mono};
+    for (const WindowView& v : views) f.views.push_back(v.view);
   return Status::ok();
 }
 
-void DesktopTarget::draw_annotation_overlay(const ViewSpec& view) {
-  if (!tools_) return;
-  annotate::AnnotationStore* store = &tools_->store();
-  if (tools_->revision() != overlay_revision_) {
-    overlay_revision_ = tools_->revision();
-    overlay_points_.clear();
-    overlay_lines_.clear();
-    auto markers = store->markers();
-    auto measurements = store->measurements();
-    if (!markers || !measurements) {
-      log_warn("viewer: " + store->path() + ": " + (!markers ? markers.status() : measurements.status()).message());
-    } else {
-      for (const annotate::Marker& m : *markers) overlay_points_.push_back({m.pos, m.color});
-      for (const annotate::Measurement& m : *measurements)
-        overlay_lines_.push_back({OverlayPoint{m.a, {1, 1, 1, 1}}, OverlayPoint{m.b, {1, 1, 1, 1}}});
+void DesktopTarget::read_overlay() {
+  if (tools_->revision() == overlay_revision_) return;
+  overlay_revision_ = tools_->revision();
+  overlay_ = {};
+  annotate::AnnotationStore& store = tools_->store();
+  auto markers = store.markers();
+  auto measurements = store.measurements();
+  auto skeletons = store.skeletons();
+  auto tracks = store.tracks();
+  auto rois = store.rois();
+  for (const Status& s : {markers.status(), measurements.status(), skeletons.status(), tracks.status(), rois.status()})
+    if (!s) {
+      log_warn("viewer: " + store.path() + ": " + s.message());
+      return;
+    }
+  std::map<annotate::Id, annotate::Marker> by_id;
+  for (const annotate::Marker& m : *markers) {
+    overlay_.markers.push_back({OverlayPoint{m.pos, m.color}, m.timepoint});
+    by_id[m.id] = m;
+  }
+  for (const annotate::Measurement& m : *measurements)
+    overlay_.lines.push_back({OverlayPoint{m.a, {1, 1, 1, 1}}, OverlayPoint{m.b, {1, 1, 1, 1}}});
+  const std::array<double, 4> skeleton_colour{0, 1, 0, 1}, track_colour{1, 0, 1, 1};
+  for (const annotate::SkeletonInfo& info : *skeletons) {
+    auto sk = store.skeleton(info.id);
+    if (!sk) {
+      log_warn("viewer: " + store.path() + ": " + sk.status().message());
+      continue;
+    }
+    for (const auto& [id, n] : sk->nodes()) {
+      overlay_.nodes.push_back({n.pos, skeleton_colour});
+      if (const annotate::SkeletonNode* p = sk->find(n.parent))
+        overlay_.lines.push_back({OverlayPoint{p->pos, skeleton_colour}, OverlayPoint{n.pos, skeleton_colour}});
     }
   }
+  for (const annotate::Track& t : *tracks)  // its markers in timepoint order, one step to the next
+    for (size_t i = 1; i < t.markers.size(); ++i)
+      if (by_id.count(t.markers[i - 1]) && by_id.count(t.markers[i]))
+        overlay_.lines.push_back({OverlayPoint{by_id[t.markers[i - 1]].pos, track_colour},
+                                  OverlayPoint{by_id[t.markers[i]].pos, track_colour}});
+  for (const annotate::Roi& r : *rois) overlay_.boxes.push_back({r.min, r.max});
+}
+
+void DesktopTarget::draw_annotation_overlay(const std::vector<WindowView>& views) {
+  if (!tools_) return;
+  read_overlay();
+  for (const WindowView& v : views) draw_overlay_view(v);
+}
+
+void DesktopTarget::draw_overlay_view(const WindowView& view) {
   const VolumePlacement& placement = o_.viewer->placement;
-  const Camera cam = camera_for_view(view, o_.viewer->transform);
-  const glm::dvec3 forward = glm::normalize(cam.target - cam.eye);
-  const glm::dvec3 right = glm::normalize(glm::cross(forward, cam.up));
-  const glm::dvec3 up = glm::cross(right, forward);
-  const double tx = std::tan(view.fov.right), ty = std::tan(view.fov.up);
-  // Voxel coordinates -> window pixels (the renderer's convention: voxel v at (v - dims/2) * size).
+  const VolumeTransform& transform = o_.viewer->transform;
   auto project = [&](const std::array<double, 3>& v, ImVec2* out) {
-    glm::dvec3 w;
-    for (int i = 0; i < 3; ++i) w[i] = (v[i] - 0.5 * placement.dims[i]) * placement.voxel_size[i];
-    const glm::dvec3 d = w - cam.eye;
-    const double z = glm::dot(d, forward);
-    if (z <= 1e-9) return false;
-    const double nx = glm::dot(d, right) / (z * tx), ny = glm::dot(d, up) / (z * ty);
-    *out = ImVec2(float(0.5 * (nx + 1.0) * view.width), float(0.5 * (1.0 - ny) * view.height));
-    return true;
+    const auto p = project_voxel(view, transform, placement, v);
+    if (p) *out = ImVec2(float((*p)[0]), float((*p)[1]));
+    return p.has_value();
   };
   auto colour = [](const std::array<double, 4>& c) {
     return ImGui::GetColorU32(ImVec4(float(c[0]), float(c[1]), float(c[2]), float(c[3])));
   };
   ImDrawList* draw = ImGui::GetBackgroundDrawList();
-  const float radius = std::max(6.0f, float(view.height) / 60.0f);
-  std::vector<std::array<OverlayPoint, 2>> lines = overlay_lines_;
-  if (const auto& drawing = tools_->palette().live().measuring)  // the one being drawn, in grey
+  draw->PushClipRect(ImVec2(float(view.x0), 0), ImVec2(float(view.x0 + view.view.width), float(view.view.height)));
+  const float radius = std::max(6.0f, float(view.view.height) / 60.0f);
+  const annotate::ToolLiveState& live = tools_->palette().live();
+  std::vector<std::array<OverlayPoint, 2>> lines = overlay_.lines;
+  if (const auto& drawing = live.measuring)  // the one being drawn, in grey
     lines.push_back({OverlayPoint{drawing->a, {0.7, 0.7, 0.7, 1}}, OverlayPoint{drawing->b, {0.7, 0.7, 0.7, 1}}});
   for (const auto& [a, b] : lines) {
     ImVec2 pa, pb;
-    if (project(a.voxel, &pa) && project(b.voxel, &pb)) {
-      draw->AddLine(pa, pb, colour(a.color), 2.0f);
-      draw->AddCircle(pa, radius * 0.6f, colour(a.color), 0, 2.0f);
-      draw->AddCircle(pb, radius * 0.6f, colour(b.color), 0, 2.0f);
+    if (project(a.voxel, &pa) && project(b.voxel, &pb)) draw->AddLine(pa, pb, colour(a.color), 2.0f);
+  }
+  for (const auto& m : overlay_.lines) {  // measurement ends (white) get rings
+    ImVec2 pa, pb;
+    if (m[0].color != std::array<double, 4>{1, 1, 1, 1}) continue;
+    if (project(m[0].voxel, &pa) && project(m[1].voxel, &pb)) {
+      draw->AddCircle(pa, radius * 0.6f, colour(m[0].color), 0, 2.0f);
+      draw->AddCircle(pb, radius * 0.6f, colour(m[1].color), 0, 2.0f);
     }
   }
-  for (const OverlayPoint& p : overlay_points_) {
+  for (const OverlayPoint& n : overlay_.nodes) {
+    ImVec2 at;
+    if (project(n.voxel, &at)) draw->AddCircleFilled(at, radius * 0.4f, colour(n.color));
+  }
+  // Boxes: the 12 edges of each (the one being dragged or last stored in grey when it is not stored yet).
+  std::vector<std::array<std::array<double, 3>, 2>> boxes = overlay_.boxes;
+  if (live.roi && live.roi->id == 0) boxes.push_back({live.roi->min, live.roi->max});
+  for (const auto& [lo, hi] : boxes) {
+    const ImU32 c = colour(live.roi && live.roi->id == 0 && lo == live.roi->min && hi == live.roi->max
+                               ? std::array<double, 4>{0.7, 0.7, 0.7, 1}
+                               : std::array<double, 4>{0, 1, 1, 1});
+    for (int edge = 0; edge < 12; ++edge) {
+      const int axis = edge / 4, a = (axis + 1) % 3, b = (axis + 2) % 3;
+      std::array<double, 3> p = lo, q = lo;
+      p[a] = q[a] = (edge & 1) ? hi[a] : lo[a];
+      p[b] = q[b] = (edge & 2) ? hi[b] : lo[b];
+      q[axis] = hi[axis];
+      ImVec2 pp, pq;
+      if (project(p, &pp) && project(q, &pq)) draw->AddLine(pp, pq, c, 2.0f);
+    }
+  }
+  const uint32_t t = state_->scene().timepoint;
+  for (const auto& [p, timepoint] : overlay_.markers) {
     ImVec2 at;
     if (!project(p.voxel, &at)) continue;
+    if (timepoint != t) {  // another timepoint's marker (a track's): a ring
+      draw->AddCircle(at, radius, colour(p.color), 0, 2.0f);
+      continue;
+    }
     draw->AddCircleFilled(at, radius, colour(p.color));
     draw->AddCircle(at, radius + 1.0f, IM_COL32(0, 0, 0, 255), 0, 2.0f);  // readable on bright data too
+    if (live.roi && live.roi->contains(p.voxel))  // inside the box being dragged or last stored: a cyan ring
+      draw->AddCircle(at, radius + 4.0f, colour({0, 1, 1, 1}), 0, 2.0f);
   }
+  draw->PopClipRect();
 }
 
-std::array<double, 3> DesktopTarget::voxel_under(double x, double y) const {
-  const VolumePlacement& placement = o_.viewer->placement;
-  const CameraState c = viewer_world_camera(*state_, placement);
-  const glm::dvec3 eye = vec(c.eye), focus = vec(c.target), forward = glm::normalize(focus - eye);
-  const glm::dvec3 right = glm::normalize(glm::cross(forward, vec(c.up))), up = glm::cross(right, forward);
-  const double ty = std::tan(c.fov_y_deg * 3.14159265358979323846 / 360.0);
-  const double tx = ty * double(o_.width) / double(o_.height);
-  const double nx = 2.0 * x / double(o_.width) - 1.0, ny = 1.0 - 2.0 * y / double(o_.height);
-  const glm::dvec3 dir = forward + nx * tx * right + ny * ty * up;
-  const glm::dvec3 w = eye + dir * (glm::dot(focus - eye, forward) / glm::dot(dir, forward));
-  std::array<double, 3> voxel;
-  for (int i = 0; i < 3; ++i) voxel[i] = w[i] / placement.voxel_size[i] + 0.5 * placement.dims[i];
-  return voxel;
+std::optional<std::array<double, 3>> DesktopTarget::voxel_under(double x, double y) const {
+  const std::vector<WindowView> views = viewer_window_views();
+  const std::optional<size_t> v = view_at(views, x);
+  if (!v) return std::nullopt;
+  const glm::dvec3 focus = vec(viewer_world_camera(*state_, o_.viewer->placement).target);
+  return xr::voxel_under(views[*v], o_.viewer->transform, o_.viewer->placement, focus, x, y);
 }
 
 void DesktopTarget::on_viewer_click(double x, double y) {
   click_error_.clear();
-  if (!tools_ || panel_->mode == ToolPanel::Mode::kNavigate) return;
-  if (o_.stereo) {
-    panel_->message = "the tools place in the mono window only";
+  if (!tools_ || panel_->mode == ToolPanel::Mode::kNavigate || panel_->mode == ToolPanel::Mode::kRoi) return;
+  const std::optional<std::array<double, 3>> v = voxel_under(x, y);
+  if (!v) {
+    click_error_ = panel_->message = "click: the pixel's ray does not meet the plane through the orbit centre";
     return;
   }
-  const std::array<double, 3> v = voxel_under(x, y);
+  const annotate::Vec3 at{(*v)[0], (*v)[1], (*v)[2]};
   const uint32_t t = state_->scene().timepoint;
-  const Status s = panel_->mode == ToolPanel::Mode::kCount ? tools_->count({v[0], v[1], v[2]}, panel_->cls, t)
-                                                             : tools_->measure_click({v[0], v[1], v[2]}, t);
+  Status s = Status::ok();
+  switch (panel_->mode) {
+    case ToolPanel::Mode::kCount: s = tools_->count(at, panel_->cls, t); break;
+    case ToolPanel::Mode::kMeasure: s = tools_->measure_click(at, t); break;
+    case ToolPanel::Mode::kTrace: s = tools_->trace_click(traced_node_under(x, y).value_or(at), t); break;
+    case ToolPanel::Mode::kTrack: s = tools_->track_click(at, panel_->cls, t); break;
+    default: break;
+  }
   panel_->message = s ? tools_->palette().live().last_edit : s.message();
-  if (!s) click_error_ = s.message();
+  if (!s) click_error_ = "click: " + s.message();
+}
+
+// The node of the skeleton being traced drawn within a few pixels of (x, y): clicking it continues from it.
+std::optional<annotate::Vec3> DesktopTarget::traced_node_under(double x, double y) const {
+  const annotate::Id skeleton = tools_->palette().live().skeleton;
+  if (skeleton == 0) return std::nullopt;
+  auto sk = tools_->store().skeleton(skeleton);
+  if (!sk) return std::nullopt;  // the click adds a node, which reports the store's problem
+  std::vector<std::array<double, 3>> positions;
+  for (const auto& [id, n] : sk->nodes()) positions.push_back(n.pos);
+  const std::vector<WindowView> views = viewer_window_views();
+  const std::optional<size_t> v = view_at(views, x);
+  if (!v) return std::nullopt;
+  const auto hit = nearest_on_screen(views[*v], o_.viewer->transform, o_.viewer->placement, positions, x, y, 8.0);
+  if (!hit) return std::nullopt;
+  return positions[*hit];
+}
+
+void DesktopTarget::on_roi_drag(int action_code, double x, double y) {
+  if (!tools_ || panel_->mode != ToolPanel::Mode::kRoi) {
+    click_error_ = "drag: the ROI tool draws boxes (tool roi)";
+    return;
+  }
+  const auto action = annotate::ToolAction(action_code);
+  const std::vector<WindowView> views = viewer_window_views();
+  if (action == annotate::ToolAction::kPress) {
+    const std::optional<size_t> v = view_at(views, x);
+    if (!v) return;
+    roi_view_ = *v;
+    roi_axis_ = depth_axis(views[*v], o_.viewer->transform);
+  }
+  if (roi_view_ >= views.size()) return;
+  // A drag that left its view keeps to it: the pixel is seen through the view it started in.
+  const glm::dvec3 focus = vec(viewer_world_camera(*state_, o_.viewer->placement).target);
+  const auto voxel = xr::voxel_under(views[roi_view_], o_.viewer->transform, o_.viewer->placement, focus, x, y);
+  if (!voxel) return;
+  // The box spans the dragged rectangle and the whole volume along the axis nearest the view direction.
+  const auto corner = on_volume_face(*voxel, roi_axis_, o_.viewer->placement, action != annotate::ToolAction::kPress);
+  const Status s = tools_->roi_drag(action, {corner[0], corner[1], corner[2]}, state_->scene().timepoint);
+  roi_dragging_ = s && action != annotate::ToolAction::kRelease;
+  panel_->message = s ? tools_->palette().live().last_edit : s.message();
+  if (!s) click_error_ = "drag: " + s.message();
+}
+
+void DesktopTarget::finish_tool() {
+  const Status s = tools_->finish(state_->scene().timepoint);
+  panel_->message = s ? tools_->palette().live().last_edit : s.message();
+  if (!s) click_error_ = "finish: " + s.message();
+}
+
+void DesktopTarget::remove_annotation(AnnotationKind kind, uint64_t id) {
+  const Status s = tools_->remove(kind, id);
+  panel_->message = s ? std::string("removed ") + annotation_kind_name(kind) + " " + std::to_string(id) : s.message();
+  if (!s) click_error_ = std::string("remove ") + annotation_kind_name(kind) + " " + std::to_string(id) + ": " + s.message();
+}
+
+void DesktopTarget::add_keyframe() {
+  keyframes_.push_back(pose_for_camera(viewer_world_camera(*state_, o_.viewer->placement), o_.viewer->transform));
+  movie_panel_->message = "keyframe " + std::to_string(keyframes_.size()) + " added";
+}
+
+Status DesktopTarget::start_movie_export(const MovieRequest& request) {
+  if (o_.stereo) return unsupported(request.output + ": movies are exported from the mono window (drop --stereo)");
+  if (export_) return invalid_argument(request.output + ": a movie is being exported already");
+  const std::string inputs[] = {o_.viewer->scene.volume, o_.viewer->script ? o_.viewer->script->path : std::string(),
+                                o_.viewer->store ? o_.viewer->store->path() : std::string()};
+  VXR_ASSIGN_OR_RETURN(MovieExport m, MovieExport::start(request, keyframes_, inputs));
+  export_ = std::make_unique<MovieExport>(std::move(m));
+  movie_panel_->message = "exporting " + std::to_string(request.frames) + " frames to " + request.output;
+  return Status::ok();
 }
 
 Scene DesktopTarget::card_scene() const {
@@ -793,11 +1008,7 @@ Status DesktopTarget::restore_card(uint64_t id) {
   VXR_ASSIGN_OR_RETURN(annotate::Card card, tools_->store().card(id, false));
   auto scene = scene_from_json(card.scene_json);
   if (!scene) return Status(scene.status().code(), "card " + std::to_string(id) + ": " + scene.status().message());
-  OrbitCamera orbit = state_->orbit();
-  if (scene->has_camera) {
-    const glm::dvec3 e = o_.viewer->placement.extent();
-    orbit = orbit_for_camera(scene->camera, std::max({e.x, e.y, e.z}));
-  }
+  const OrbitCamera orbit = scene_orbit(*scene, o_.viewer->placement).value_or(state_->orbit());
   const Status s = state_->restore(scene->render, scene->timepoint, orbit);
   return s ? s : Status(s.code(), "card " + std::to_string(id) + ": " + s.message());
 }
@@ -830,6 +1041,8 @@ Status DesktopTarget::record_after_views(VkCommandBuffer cmd, FrameSubmit& submi
     vkCmdBlitImage(cmd, e.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
                    &blit, VK_FILTER_LINEAR);
   }
+  movie_copied_ = movie_frame_pending_ && !nothing_visible_;
+  if (movie_copied_) VXR_RETURN_IF_ERROR(record_movie_copy(cmd));
   ui_->record(cmd, index);  // TRANSFER_DST -> panels drawn -> PRESENT_SRC
   if (!screenshot_pending_.empty()) {
     const VkDeviceSize bytes = VkDeviceSize(swap_extent_.width) * swap_extent_.height * 4;
@@ -856,6 +1069,55 @@ Status DesktopTarget::record_after_views(VkCommandBuffer cmd, FrameSubmit& submi
   submit.signal.push_back(render_done_[index]);
   image_acquired_ = true;
   image_index_ = index;
+  return Status::ok();
+}
+
+// The movie's frame: eye 0 as rendered (no panels, no overlay), into a host buffer.
+Status DesktopTarget::record_movie_copy(VkCommandBuffer cmd) {
+  const gpu::Image& eye = eyes_.front();
+  const VkDeviceSize bytes = VkDeviceSize(eye.extent.width) * eye.extent.height * 4;
+  if (!movie_buffer_.buffer || movie_buffer_.size < bytes) {
+    VXR_ASSIGN_OR_RETURN(movie_buffer_, gpu::create_buffer(*ctx_, {bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                                                   gpu::MemoryIntent::kReadback, "desktop movie frame"}));
+  }
+  VkBufferImageCopy region{};
+  region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  region.imageExtent = {eye.extent.width, eye.extent.height, 1};
+  // The eye rests in TRANSFER_SRC_OPTIMAL, written before the blit that just read it.
+  vkCmdCopyImageToBuffer(cmd, eye.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, movie_buffer_.buffer, 1, &region);
+  VkMemoryBarrier to_host{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0, nullptr, 0,
+                       nullptr);
+  return Status::ok();
+}
+
+// Writes the frame record_movie_copy read back; after the last, the MP4 (if one was asked for).
+Status DesktopTarget::write_movie_frame() {
+  std::unique_ptr<MovieExport> m = std::move(export_);  // back below unless this ends it
+  if (!m) return Status::ok();
+  if (!movie_buffer_.host_coherent) {
+    VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
+    range.memory = movie_buffer_.memory;
+    range.size = VK_WHOLE_SIZE;
+    VXR_VK_TRY(vkInvalidateMappedMemoryRanges(ctx_->device(), 1, &range));
+  }
+  const gpu::Image& eye = eyes_.front();
+  ImageRgba8 img(eye.extent.width, eye.extent.height);  // the eyes are RGBA8 (sRGB-encoded on an sRGB window)
+  if (movie_copied_)  // else every channel was hidden: a black frame, as the window showed
+    std::memcpy(img.pixels.data(), movie_buffer_.mapped, img.pixels.size());
+  for (size_t i = 3; i < img.pixels.size(); i += 4) img.pixels[i] = 255;  // the window is opaque
+  VXR_ASSIGN_OR_RETURN(std::string path, m->frame_path(m->next_frame()));
+  VXR_RETURN_IF_ERROR(write_png(path, img));
+  m->frame_written();
+  if (!m->done()) {
+    export_ = std::move(m);
+    return Status::ok();
+  }
+  VXR_ASSIGN_OR_RETURN(std::string written, m->finish());
+  movie_panel_->message = "movie " + written + ": " + std::to_string(m->request().frames) + " frames";
+  log_info("viewer: " + movie_panel_->message);
   return Status::ok();
 }
 

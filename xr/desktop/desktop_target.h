@@ -9,8 +9,10 @@
 // With a ViewerSetup the window is the viewer: Dear ImGui panels over a
 // ViewerState (xr/desktop/viewer_state.h) that says what the renderer draws
 // each frame, the orbit camera from the mouse, keys through the key callback,
-// the title "vxr - DATASET - N ms", markers and measurements of the store drawn
-// over the volume, and an optional UI script. The eyes are then blitted and
+// the title "vxr - DATASET - N ms", the store's markers, measurements,
+// skeletons, tracks and boxes drawn over each view (both eyes in stereo, where
+// clicks pick through the eye clicked), movie export along camera keyframes,
+// and an optional UI script. The eyes are then blitted and
 // the panels drawn into the swapchain image in the frame's own command buffer
 // (record_after_views), and only a screenshot reads anything back.
 #pragma once
@@ -18,6 +20,7 @@
 #include <array>
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +28,7 @@
 #include "gpu/resources.h"
 #include "scene/render_settings.h"
 #include "volume/playback.h"
+#include "xr/desktop/viewer_pick.h"
 #include "xr/frame_target.h"
 
 struct GLFWwindow;
@@ -37,11 +41,22 @@ class ImGuiLayer;
 class UiScriptRunner;
 class ViewerTools;
 struct ToolPanel;
+struct MoviePanel;
+class MovieExport;
+struct MovieRequest;
+enum class AnnotationKind;
 
-// A marker or measurement end in voxels, with its colour (the overlay draws it).
+// A marker or line end in voxels, with its colour (the overlay draws it).
 struct OverlayPoint {
   std::array<double, 3> voxel;
   std::array<double, 4> color;
+};
+// What the overlay draws of the store, read again after each edit.
+struct OverlayContent {
+  std::vector<std::pair<OverlayPoint, uint32_t>> markers;  // with their timepoint (others: a ring)
+  std::vector<std::array<OverlayPoint, 2>> lines;          // measurements, skeleton edges, track steps
+  std::vector<OverlayPoint> nodes;                         // skeleton nodes
+  std::vector<std::array<std::array<double, 3>, 2>> boxes; // ROI min, max
 };
 
 struct DesktopOptions {
@@ -101,13 +116,29 @@ class DesktopTarget : public FrameTarget {
   Pose head_pose() const;
   // The viewer's frame: script steps, panels, overlay, settings and views.
   Status viewer_frame(FrameState& f);
-  void draw_annotation_overlay(const ViewSpec& view);
+  // The UI script's steps due this frame; `card`, `restore`: its panel buttons.
+  Status script_frame(FrameState& f, bool* card, std::optional<uint64_t>* restore);
+  Status record_movie_copy(VkCommandBuffer cmd);
+  // The views the window shows now (mono, or both eyes), from the viewer's camera.
+  std::vector<WindowView> viewer_window_views() const;
+  Fov viewer_fov() const;
+  void read_overlay();
+  void draw_annotation_overlay(const std::vector<WindowView>& views);
+  void draw_overlay_view(const WindowView& view);
   Status write_screenshot();
   void on_viewer_cursor(double dx, double dy);
   // A left click at window pixel (x, y): the tools panel's tool places there.
   void on_viewer_click(double x, double y);
-  // The voxel under window pixel (x, y) on the plane through the orbit centre facing the camera.
-  std::array<double, 3> voxel_under(double x, double y) const;
+  // The ROI tool's drag: press, move, release at window pixel (x, y).
+  void on_roi_drag(int action, double x, double y);
+  // The voxel under window pixel (x, y) on the plane through the orbit centre facing the view clicked.
+  std::optional<std::array<double, 3>> voxel_under(double x, double y) const;
+  std::optional<std::array<double, 3>> traced_node_under(double x, double y) const;
+  void finish_tool();
+  void remove_annotation(AnnotationKind kind, uint64_t id);
+  void add_keyframe();
+  Status start_movie_export(const MovieRequest& request);
+  Status write_movie_frame();
   Scene card_scene() const;
   Status save_panel_card(const std::string& png_path);
   Status restore_card(uint64_t id);
@@ -149,10 +180,9 @@ class DesktopTarget : public FrameTarget {
   // Screenshot of this frame's swapchain image: a host buffer the frame copies into.
   std::string screenshot_pending_;
   gpu::Buffer screenshot_buffer_;
-  // The store's markers and measurements, read again after each script edit.
+  // The store's annotations as the overlay draws them, read again after each edit.
   uint64_t overlay_revision_ = UINT64_MAX;
-  std::vector<OverlayPoint> overlay_points_;
-  std::vector<std::array<OverlayPoint, 2>> overlay_lines_;
+  OverlayContent overlay_;
   std::unique_ptr<ViewerTools> tools_;  // with a store
   std::unique_ptr<ToolPanel> panel_;
   double press_x_ = 0, press_y_ = 0;
@@ -160,6 +190,17 @@ class DesktopTarget : public FrameTarget {
   std::string card_shot_;  // the panel asked for a card: this frame's picture goes here first
   std::unique_ptr<TempFile> card_temp_;  // that picture when no script screenshot was due
   std::string click_error_;              // the last click's refusal (a script stops on it)
+  bool roi_dragging_ = false;            // the ROI tool's box follows the cursor
+  size_t roi_view_ = 0;                  // ... in this view
+  int roi_axis_ = 2;                     // ... through the volume along this axis
+  // Movie export: keyframes (head poses), the export running, its frame read back from eye 0.
+  std::unique_ptr<MoviePanel> movie_panel_;
+  std::vector<Pose> keyframes_;
+  std::unique_ptr<MovieExport> export_;
+  bool export_from_script_ = false;
+  bool movie_frame_pending_ = false;
+  bool movie_copied_ = false;  // this frame's eye 0 went into movie_buffer_
+  gpu::Buffer movie_buffer_;
   uint32_t drawn_timepoint_ = 0;          // the frame's (a screenshot's log line names it)
   std::vector<TimepointPrefetcher> prefetch_;  // playback: one per channel of the view, into run_view's cache
 };

@@ -49,11 +49,39 @@ Result<UiStep> parse_step(const std::string& text) {
       return invalid_argument("usage: resize WIDTH HEIGHT (64..8192 pixels)");
     step.kind = UiStepKind::kResize;
   } else if (cmd == "tool") {
-    if (!((w.size() == 2 && (w[1] == "navigate" || w[1] == "count" || w[1] == "measure")) ||
-          (w.size() == 3 && w[1] == "count")))
-      return invalid_argument("usage: tool navigate|count [CLASS]|measure");
+    const bool with_class = w.size() >= 2 && (w[1] == "count" || w[1] == "track");
+    if (!((w.size() == 2 && (with_class || w[1] == "navigate" || w[1] == "measure" || w[1] == "trace" ||
+                             w[1] == "roi")) ||
+          (w.size() == 3 && with_class)))
+      return invalid_argument("usage: tool navigate|count [CLASS]|measure|trace|track [CLASS]|roi");
     step.kind = UiStepKind::kTool;
-    step.arg = w[1] + (w.size() == 3 ? " " + w[2] : w[1] == "count" ? " default" : "");
+    step.arg = w[1] + (w.size() == 3 ? " " + w[2] : with_class ? " default" : "");
+  } else if (cmd == "drag") {
+    bool ok = w.size() == 5;
+    for (size_t i = 0; ok && i < 4; ++i) ok = parse_number(w[i + 1], &step.xyz[i]) && step.xyz[i] >= 0;
+    if (!ok) return invalid_argument("usage: drag X Y X2 Y2 (window pixels)");
+    step.kind = UiStepKind::kDrag;
+  } else if (cmd == "finish") {
+    if (w.size() != 1) return invalid_argument("usage: finish");
+    step.kind = UiStepKind::kFinish;
+  } else if (cmd == "remove") {
+    if (w.size() != 3 || !annotation_kind_from_name(w[1]) || !parse_number(w[2], &step.xyz[0]) || step.xyz[0] < 1 ||
+        step.xyz[0] != std::floor(step.xyz[0]))
+      return invalid_argument("usage: remove marker|measurement|skeleton|track|roi ID");
+    step.kind = UiStepKind::kRemove;
+    step.arg = w[1];
+  } else if (cmd == "keyframe") {
+    if (w.size() != 1) return invalid_argument("usage: keyframe");
+    step.kind = UiStepKind::kKeyframe;
+  } else if (cmd == "export-movie") {
+    double frames = 0;
+    step.xyz[0] = 30.0;
+    if ((w.size() != 3 && w.size() != 4) || !parse_number(w[2], &frames) || frames < 2 || frames > 100000 ||
+        frames != std::floor(frames) || (w.size() == 4 && (!parse_number(w[3], &step.xyz[0]) || step.xyz[0] <= 0)))
+      return invalid_argument("usage: export-movie OUT FRAMES [FPS] (FRAMES 2..100000; OUT a folder or NAME.mp4)");
+    step.kind = UiStepKind::kExportMovie;
+    step.arg = w[1];
+    step.frames = uint64_t(frames);
   } else if (cmd == "panel-card") {
     if (w.size() < 2) return invalid_argument("usage: panel-card TITLE");
     step.kind = UiStepKind::kPanelCard;
@@ -119,6 +147,7 @@ Result<UiScript> load_ui_script(const std::string& path, const ViewerState& stat
   script.path = path;
   ViewerState dry_run = state;
   std::vector<std::string> shots;
+  size_t keyframes = 0;
   for (size_t i = 0; i < j.size(); ++i) {
     if (!j[i].is_string())
       return invalid_argument(path + ": step " + std::to_string(i + 1) + ": expected a string, got " +
@@ -141,10 +170,24 @@ Result<UiScript> load_ui_script(const std::string& path, const ViewerState& stat
       case UiStepKind::kCard:
       case UiStepKind::kTool:
       case UiStepKind::kClick:
+      case UiStepKind::kDrag:
+      case UiStepKind::kFinish:
+      case UiStepKind::kRemove:
       case UiStepKind::kPanelCard:
       case UiStepKind::kRestoreCard:
         if (!have_store) return script.step_error(i, "needs an annotation store (--annotations STORE)");
         break;
+      case UiStepKind::kKeyframe: ++keyframes; break;
+      case UiStepKind::kExportMovie: {
+        if (keyframes < 2)
+          return script.step_error(i, "needs 2 keyframe steps before it (" + std::to_string(keyframes) + " so far)");
+        const Status s = check_movie_output({step->arg, step->frames, step->xyz[0]}, inputs);
+        if (!s) return script.step_error(i, s.message());
+        for (const std::string& earlier : shots)
+          if (earlier == step->arg) return script.step_error(i, "an earlier step already writes " + earlier);
+        shots.push_back(step->arg);
+        break;
+      }
       case UiStepKind::kUi:
       case UiStepKind::kWait:
       case UiStepKind::kResize: break;
@@ -191,9 +234,29 @@ Result<UiScriptRunner::FrameWork> UiScriptRunner::before_frame(ViewerState& stat
       work.panel_card = step.arg;
       return work;
     }
-    // One click a frame, seen through that frame's camera.
+    // One click or drag a frame, seen through that frame's camera.
     if (step.kind == UiStepKind::kClick) {
       work.click = std::array<double, 2>{step.xyz[0], step.xyz[1]};
+      return work;
+    }
+    if (step.kind == UiStepKind::kDrag) {
+      work.drag = std::array<double, 4>{step.xyz[0], step.xyz[1], step.xyz[2], step.xyz[3]};
+      return work;
+    }
+    if (step.kind == UiStepKind::kFinish) {  // after a tool step of the same frame, before the next
+      work.finish = true;
+      return work;
+    }
+    if (step.kind == UiStepKind::kRemove) {
+      work.remove = std::pair{*annotation_kind_from_name(step.arg), annotate::Id(step.xyz[0])};
+      return work;
+    }
+    if (step.kind == UiStepKind::kKeyframe) {  // the camera of this frame, after the steps before it
+      work.keyframe = true;
+      return work;
+    }
+    if (step.kind == UiStepKind::kExportMovie) {
+      work.export_movie = MovieRequest{step.arg, step.frames, step.xyz[0]};
       return work;
     }
     if (Status s = run_step(step, state); !s) return script_.step_error(index, s.message());
@@ -229,6 +292,11 @@ Status UiScriptRunner::run_step(const UiStep& step, ViewerState& state) {
     case UiStepKind::kResize:
     case UiStepKind::kTool:
     case UiStepKind::kClick:
+    case UiStepKind::kDrag:
+    case UiStepKind::kFinish:
+    case UiStepKind::kRemove:
+    case UiStepKind::kKeyframe:
+    case UiStepKind::kExportMovie:
     case UiStepKind::kPanelCard:
     case UiStepKind::kRestoreCard: break;
   }

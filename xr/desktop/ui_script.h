@@ -13,11 +13,27 @@
 //   count X Y Z [CLASS]       a count marker at voxel (X, Y, Z)      } through the ToolPalette,
 //   measure X Y Z X2 Y2 Z2    a measurement between two voxels       } into --annotations STORE
 //   card TITLE...             a card: the current scene + the last screenshot
-//   tool navigate|count [CLASS]|measure   the tools panel's tool (as if picked there)
+//   tool navigate|count [CLASS]|measure|trace|track [CLASS]|roi
+//                             the tools panel's tool (as if picked there)
 //   click X Y                 a left click at window pixel (X, Y), as the mouse would
-//                             (count: a marker; measure: an end point)
+//                             (count: a marker; measure: an end point; trace: a node below
+//                             the current one, or on a traced node: continue from it;
+//                             track: the track's marker at the current timepoint)
+//   drag X Y X2 Y2            a left drag from (X, Y) to (X2, Y2): press, move, release
+//                             (roi: a box over that rectangle, through the whole volume
+//                             along the axis nearest the view direction)
+//   finish                    the tools panel's "finish" (Enter): trace: the next node
+//                             starts a new root; track: the next marker a new track
+//   remove KIND ID            the annotation list's "remove": KIND marker|measurement|
+//                             skeleton|track|roi (a track goes with its markers)
 //   panel-card TITLE...       the tools panel's "save card": this frame's picture and scene
 //   restore-card ID           the tools panel's "restore" of card ID
+//   keyframe                  the movie panel's "add keyframe": the window's camera now
+//   export-movie OUT FRAMES [FPS]
+//                             the movie panel's "export": FRAMES frames along the smooth
+//                             path through the keyframes so far (2 or more), drawn by the
+//                             window; OUT a folder (frame-00000.png ...) or NAME.mp4
+//                             (ffmpeg, FPS default 30); the next step runs when it is written
 //
 // The whole script is checked before the window opens: a bad step is one line
 // naming the file, the step number and the problem.
@@ -30,19 +46,23 @@
 #include <vector>
 
 #include "core/status.h"
+#include "xr/desktop/viewer_movie.h"
 #include "xr/desktop/viewer_state.h"
 #include "xr/desktop/viewer_tools.h"
 
 namespace vxr::xr {
 
-enum class UiStepKind { kViewer, kUi, kWait, kResize, kScreenshot, kCount, kMeasure, kCard, kTool, kClick, kPanelCard, kRestoreCard };
+enum class UiStepKind { kViewer, kUi, kWait, kResize, kScreenshot, kCount, kMeasure, kCard, kTool, kClick, kPanelCard,
+                        kRestoreCard, kDrag, kFinish, kRemove, kKeyframe, kExportMovie };
 
 struct UiStep {
   UiStepKind kind = UiStepKind::kViewer;
   std::string text;                 // as written (viewer commands are applied from it)
-  std::string arg;                  // screenshot path, count class, card title, tool ("count CLASS")
-  std::array<double, 6> xyz{};      // count: 3, measure: 6 voxel coordinates; resize, click: x, y
-  uint64_t frames = 0;              // wait
+  std::string arg;                  // screenshot path, count class, card title, tool ("count CLASS"),
+                                    // remove's kind, export-movie's output
+  std::array<double, 6> xyz{};      // count: 3, measure: 6 voxel coordinates; resize, click: x, y;
+                                    // drag: x, y, x2, y2; remove: id; export-movie: fps
+  uint64_t frames = 0;              // wait, export-movie
   bool on = true;                   // ui
 };
 
@@ -72,8 +92,14 @@ class UiScriptRunner {
     std::string screenshot;           // read this frame back into this PNG
     std::array<int, 2> resize{0, 0};  // > 0: resize the window to this
     bool done = false;                // every step ran: close the window
-    std::string tool;                 // non-empty: the tools panel switches to it ("navigate", "count CLASS", "measure")
+    std::string tool;                 // non-empty: the tools panel switches to it ("navigate", "count CLASS", "measure",
+                                      // "trace", "track CLASS", "roi")
     std::optional<std::array<double, 2>> click;  // a left click at this window pixel (as the mouse would)
+    std::optional<std::array<double, 4>> drag;   // a left drag between these window pixels
+    bool finish = false;                         // the tools panel's "finish"
+    std::optional<std::pair<AnnotationKind, annotate::Id>> remove;  // the annotation list's "remove"
+    bool keyframe = false;                       // the movie panel's "add keyframe"
+    std::optional<MovieRequest> export_movie;    // the movie panel's "export" (the next step waits for it)
     std::optional<std::string> panel_card;       // "save card" in the tools panel, with this title
     std::optional<uint64_t> restore_card;        // "restore" of this card in the tools panel
   };

@@ -25,6 +25,8 @@ std::optional<ViewerKey> viewer_key_from_glfw(int key, int action) {
     case GLFW_KEY_RIGHT_BRACKET: return repeat ? std::nullopt : std::optional(ViewerKey::kFaster);
     case GLFW_KEY_H:
     case GLFW_KEY_F1: return repeat ? std::nullopt : std::optional(ViewerKey::kToggleHelp);
+    case GLFW_KEY_ENTER:
+    case GLFW_KEY_KP_ENTER: return repeat ? std::nullopt : std::optional(ViewerKey::kFinishTool);
     case GLFW_KEY_TAB: return repeat ? std::nullopt : std::optional(ViewerKey::kToggleUi);
     default: return std::nullopt;
   }

@@ -78,56 +78,137 @@ void render_panel(ViewerState& state) {
   }
 }
 
-void read_store(ViewerTools& tools, ToolPanel& panel) {
-  if (panel.read_revision == tools.revision()) return;
+void read_store(ViewerTools& tools, ToolPanel& panel, uint32_t timepoint) {
+  if (panel.read_revision == tools.revision() && panel.read_timepoint == timepoint &&
+      panel.read_events == tools.events())
+    return;
   panel.read_revision = tools.revision();
+  panel.read_timepoint = timepoint;
+  panel.read_events = tools.events();
   annotate::AnnotationStore& store = tools.store();
   auto counts = store.counts();
   auto measurements = store.measurements();
   auto cards = store.cards();
-  if (!counts || !measurements || !cards) {
-    panel.message = store.path() + ": " + (!counts ? counts.status() : !measurements ? measurements.status()
-                                                                                      : cards.status())
-                                              .message();
-    return;
-  }
+  auto status = tools.status(timepoint);
+  auto rows = tools.annotation_list();
+  for (const Status& s : {counts.status(), measurements.status(), cards.status(), status.status(), rows.status()})
+    if (!s) {
+      panel.message = store.path() + ": " + s.message();
+      return;
+    }
   panel.counts = *counts;
   panel.lengths.clear();
   for (const annotate::Measurement& m : *measurements)
     panel.lengths.emplace_back(m.label.empty() ? "#" + std::to_string(m.id) : m.label, store.length(m));
   panel.cards = *cards;
+  panel.status = *status;
+  panel.rows = *rows;
+}
+
+void tool_choice(ViewerTools& tools, ToolPanel& panel) {
+  static const char* const kLabels[] = {"navigate", "count", "measure", "trace", "track", "roi"};
+  int mode = static_cast<int>(panel.mode);
+  for (int i = 0; i < int(std::size(kLabels)); ++i) {
+    if (i % 3 != 0) ImGui::SameLine();
+    ImGui::RadioButton(kLabels[i], &mode, i);
+  }
+  if (mode != static_cast<int>(panel.mode)) {
+    tools.cancel();
+    panel.mode = static_cast<ToolPanel::Mode>(mode);
+  }
+}
+
+// What the chosen tool is doing: the measurement or box being drawn, the trace, the track.
+void live_tool(ViewerTools& tools, ToolPanel& panel) {
+  const std::string& unit = tools.store().voxel_space().unit;
+  const ToolStatus& st = panel.status;
+  const annotate::ToolLiveState& live = tools.palette().live();
+  switch (panel.mode) {
+    case ToolPanel::Mode::kNavigate: return;
+    case ToolPanel::Mode::kCount:
+    case ToolPanel::Mode::kTrack: ImGui::InputText("class", panel.cls, sizeof panel.cls); break;
+    default: break;
+  }
+  ImGui::TextDisabled(panel.mode == ToolPanel::Mode::kRoi ? "drag a box over the volume (through it along the view)"
+                                                          : "click the volume (on the plane through the orbit centre)");
+  if (panel.mode == ToolPanel::Mode::kMeasure && live.measuring)
+    ImGui::Text("measuring: %.3f %s", live.measuring_length, unit.c_str());
+  if (panel.mode == ToolPanel::Mode::kTrace) {
+    if (st.skeleton == 0)
+      ImGui::TextUnformatted("no skeleton traced yet");
+    else
+      ImGui::Text("skeleton %llu: %zu node(s), traced length %.3f %s", static_cast<unsigned long long>(st.skeleton),
+                  st.nodes, st.traced_length, unit.c_str());
+    if (st.current_node != annotate::kNoParent)
+      ImGui::Text("next node below node %lld", static_cast<long long>(st.current_node));
+    else if (st.skeleton != 0)
+      ImGui::TextUnformatted("next node: a new root");
+  }
+  if (panel.mode == ToolPanel::Mode::kTrack) {
+    if (st.track == 0)
+      ImGui::TextUnformatted("no active track: the next click starts one");
+    else
+      ImGui::Text("track %llu: %zu marker(s), timepoints %u..%u (%u long)", static_cast<unsigned long long>(st.track),
+                  st.track_markers, st.first_timepoint, st.last_timepoint, st.last_timepoint - st.first_timepoint + 1);
+  }
+  if (panel.mode == ToolPanel::Mode::kRoi && st.roi) {
+    const annotate::Roi& r = *st.roi;
+    ImGui::Text("box%s (%.1f, %.1f, %.1f) - (%.1f, %.1f, %.1f)", r.id ? (" " + std::to_string(r.id)).c_str() : "",
+                r.min[0], r.min[1], r.min[2], r.max[0], r.max[1], r.max[2]);
+    ImGui::Text("%zu marker(s) inside at this timepoint", st.roi_markers);
+  }
+  if (panel.mode == ToolPanel::Mode::kTrace || panel.mode == ToolPanel::Mode::kTrack) {
+    if (ImGui::Button("finish (Enter)")) panel.finish = true;
+  }
+}
+
+// Every stored annotation, markers under their class, each with remove.
+void annotation_list(ToolPanel& panel) {
+  if (!ImGui::CollapsingHeader("annotations")) return;
+  std::string open_group;
+  bool group_open = true;
+  for (const AnnotationRow& row : panel.rows) {
+    if (row.kind == AnnotationKind::kMarker && row.group != open_group) {
+      if (!open_group.empty() && group_open) ImGui::TreePop();
+      open_group = row.group;
+      const auto n = panel.counts.find(row.group);
+      group_open = ImGui::TreeNode(row.group.c_str(), "%s: %zu marker(s)", row.group.c_str(),
+                                   n == panel.counts.end() ? size_t(0) : n->second);
+    }
+    if (row.kind != AnnotationKind::kMarker && !open_group.empty()) {
+      if (group_open) ImGui::TreePop();
+      open_group.clear();
+      group_open = true;
+    }
+    if (row.kind == AnnotationKind::kMarker && !group_open) continue;
+    ImGui::PushID(static_cast<int>(row.kind) * 1000003 + static_cast<int>(row.id));
+    if (ImGui::SmallButton("remove")) panel.remove = std::pair{row.kind, row.id};
+    ImGui::SameLine();
+    ImGui::TextUnformatted(row.text.c_str());
+    ImGui::PopID();
+  }
+  if (!open_group.empty() && group_open) ImGui::TreePop();
 }
 
 }  // namespace
 
-void draw_tools_panel(ViewerTools& tools, ToolPanel& panel) {
-  read_store(tools, panel);
+void draw_tools_panel(ViewerTools& tools, ToolPanel& panel, uint32_t timepoint) {
+  read_store(tools, panel, timepoint);
   panel.save_card = false;
   panel.restore.reset();
+  panel.finish = false;
+  panel.remove.reset();
   const ImVec2 size = ImGui::GetIO().DisplaySize;
   ImGui::SetNextWindowPos(ImVec2(size.x - 10, 10), ImGuiCond_FirstUseEver, ImVec2(1, 0));
-  ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(320, 0), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);  // a title bar until the user opens it
   if (ImGui::Begin("Tools and cards")) {
-    int mode = static_cast<int>(panel.mode);
-    ImGui::RadioButton("navigate", &mode, 0);
-    ImGui::SameLine();
-    ImGui::RadioButton("count", &mode, 1);
-    ImGui::SameLine();
-    ImGui::RadioButton("measure", &mode, 2);
-    if (mode != static_cast<int>(panel.mode)) {
-      tools.cancel();
-      panel.mode = static_cast<ToolPanel::Mode>(mode);
-    }
-    if (panel.mode == ToolPanel::Mode::kCount) ImGui::InputText("class", panel.cls, sizeof panel.cls);
-    if (panel.mode != ToolPanel::Mode::kNavigate)
-      ImGui::TextDisabled("click the volume (on the plane through the orbit centre)");
-    const annotate::ToolLiveState& live = tools.palette().live();
-    if (live.measuring)
-      ImGui::Text("measuring: %.3f %s", live.measuring_length, tools.store().voxel_space().unit.c_str());
+    tool_choice(tools, panel);
+    live_tool(tools, panel);
     for (const auto& [cls, n] : panel.counts) ImGui::BulletText("%s: %zu marker(s)", cls.c_str(), n);
     for (const auto& [label, length] : panel.lengths)
       ImGui::BulletText("measurement %s: %.3f %s", label.c_str(), length, tools.store().voxel_space().unit.c_str());
+    annotation_list(panel);
     ImGui::Separator();
     ImGui::InputText("title", panel.card_title, sizeof panel.card_title);
     ImGui::InputTextMultiline("note", panel.card_note, sizeof panel.card_note, ImVec2(0, 48));
@@ -138,6 +219,35 @@ void draw_tools_panel(ViewerTools& tools, ToolPanel& panel) {
       ImGui::SameLine();
       ImGui::TextUnformatted(c.title.empty() ? "(untitled)" : c.title.c_str());
       ImGui::PopID();
+    }
+    if (!panel.message.empty()) ImGui::TextWrapped("%s", panel.message.c_str());
+  }
+  ImGui::End();
+}
+
+void draw_movie_panel(MoviePanel& panel) {
+  panel.add_keyframe = panel.clear_keyframes = panel.start_export = false;
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos(ImVec2(size.x - 10, size.y - 10), ImGuiCond_FirstUseEver, ImVec2(1, 1));
+  ImGui::SetNextWindowSize(ImVec2(320, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
+  if (ImGui::Begin("Movie")) {
+    ImGui::Text("%zu keyframe(s)", panel.keyframes);
+    if (ImGui::Button("add keyframe")) panel.add_keyframe = true;
+    ImGui::SameLine();
+    if (ImGui::Button("clear")) panel.clear_keyframes = true;
+    ImGui::InputText("output", panel.output, sizeof panel.output);
+    ImGui::TextDisabled("NAME.mp4 (ffmpeg) or a folder for PNG frames");
+    ImGui::InputInt("frames", &panel.frames);
+    panel.frames = std::clamp(panel.frames, 2, 100000);
+    ImGui::InputFloat("fps", &panel.fps, 1.0f, 10.0f, "%.3g");
+    panel.fps = std::clamp(panel.fps, 0.1f, 1000.0f);
+    if (panel.progress) {
+      ImGui::ProgressBar(float(*panel.progress), ImVec2(-1, 0));
+    } else {
+      ImGui::BeginDisabled(panel.keyframes < 2);
+      if (ImGui::Button("export")) panel.start_export = true;
+      ImGui::EndDisabled();
     }
     if (!panel.message.empty()) ImGui::TextWrapped("%s", panel.message.c_str());
   }

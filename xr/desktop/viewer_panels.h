@@ -24,26 +24,50 @@ struct PanelInputs {
 void draw_viewer_panels(ViewerState& state, const PanelInputs& in);
 
 // The tool palette and cards panel's own state (text fields, what the user
-// asked for this frame). The window acts on save_card and restore.
+// asked for this frame). The window acts on save_card, restore, finish and remove.
 struct ToolPanel {
-  enum class Mode { kNavigate, kCount, kMeasure };
+  enum class Mode { kNavigate, kCount, kMeasure, kTrace, kTrack, kRoi };
   Mode mode = Mode::kNavigate;
   char cls[64] = "default";
   char card_title[128] = "";
   char card_note[1024] = "";
   bool save_card = false;                  // set for one frame: save a card with this frame's picture
   std::optional<annotate::Id> restore;     // set for one frame: show this card's scene
+  bool finish = false;                     // set for one frame: "finish" (trace: new root; track: new track)
+  std::optional<std::pair<AnnotationKind, annotate::Id>> remove;  // set for one frame: remove this annotation
   std::string message;                     // the last action's result or error
   // The store as last read (again after each edit).
   uint64_t read_revision = UINT64_MAX;
+  uint32_t read_timepoint = UINT32_MAX;
+  uint64_t read_events = UINT64_MAX;
   std::map<std::string, size_t> counts;
   std::vector<std::pair<std::string, double>> lengths;  // measurement label, length
   std::vector<annotate::Card> cards;                    // without media
+  ToolStatus status;                                    // the live tool
+  std::vector<AnnotationRow> rows;                      // the annotation list
 };
 
-// Tools (navigate / count / measure, the count class), live counts and
-// lengths, cards (title, note, save, list, restore).
-void draw_tools_panel(ViewerTools& tools, ToolPanel& panel);
+// The movie panel's state: keyframes added, the export's output and progress.
+struct MoviePanel {
+  char output[512] = "movie.mp4";
+  int frames = 90;
+  float fps = 30.0f;               // an .mp4's frame rate
+  size_t keyframes = 0;            // the window keeps them
+  bool add_keyframe = false;       // set for one frame
+  bool clear_keyframes = false;    // set for one frame
+  bool start_export = false;       // set for one frame
+  std::optional<double> progress;  // 0..1 while an export runs
+  std::string message;
+};
+
+// Tools (navigate / count / measure / trace / track / roi, the class), the
+// live tool's state (nodes and traced length, the active track, the box and
+// the markers in it), the annotation list with remove, cards (title, note,
+// save, list, restore). `timepoint`: the one shown (ROI counts are at it).
+void draw_tools_panel(ViewerTools& tools, ToolPanel& panel, uint32_t timepoint);
+
+// Keyframes of the camera and the movie export along them, with its progress.
+void draw_movie_panel(MoviePanel& panel);
 
 // "vxr - DATASET - 12.3 ms" for the window title.
 std::string viewer_window_title(const std::string& dataset, double frame_ms);

@@ -1,5 +1,6 @@
 #include "xr/desktop/viewer_setup.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace vxr::xr {
@@ -43,6 +44,16 @@ Result<std::vector<float>> coarse_histogram(const ChunkSource& source, uint32_t 
   std::vector<float> out(bins);
   for (size_t i = 0; i < bins; ++i) out[i] = float(std::log1p(counts[i]));
   return out;
+}
+
+}  // namespace vxr::xr
+
+namespace vxr::xr {
+
+std::optional<OrbitCamera> scene_orbit(const Scene& scene, const VolumePlacement& placement) {
+  if (!scene.has_camera) return std::nullopt;
+  const glm::dvec3 e = placement.extent();
+  return orbit_for_camera(camera_in_volume_frame(scene.camera, scene.transform), std::max({e.x, e.y, e.z}));
 }
 
 }  // namespace vxr::xr

@@ -28,7 +28,15 @@ struct ViewerSetup {
   std::optional<UiScript> script;                    // checked; run, then the window closes
   std::shared_ptr<annotate::AnnotationStore> store;  // tools, cards, the marker overlay (may be null)
   std::vector<std::vector<float>> histograms;        // per channel, bins over data_range (panels)
+  std::optional<OrbitCamera> start_orbit;            // `--card`: the window starts at the card's camera
 };
+
+// The orbit that shows `scene`'s camera: the camera moved into the volume's
+// frame through the scene's volume transform (the window draws the volume
+// untransformed), in units of the volume's longest side. nullopt without a
+// camera. An orbit has no roll: a camera rolled about its view keeps its eye
+// and target, and its up becomes the orbit's.
+std::optional<OrbitCamera> scene_orbit(const Scene& scene, const VolumePlacement& placement);
 
 // Histogram of `channel` at `timepoint` over `range` in `bins` bins, from the
 // finest level of at most `max_chunks` chunks (a coarse level: the data's

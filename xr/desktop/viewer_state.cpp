@@ -74,6 +74,7 @@ const std::vector<ShortcutHelp>& viewer_shortcuts() {
       {"Space", "play / pause the timepoints"}, {", / .", "step one timepoint back / on (pauses)"},
       {"[ / ]", "play slower / faster"},
       {"H or F1", "show / hide this help"},  {"Tab", "show / hide the panels"},
+      {"Enter", "finish: end the traced branch or the track"},
       {"Esc", "quit"},
   };
   return table;
@@ -322,6 +323,7 @@ void ViewerState::handle_key(ViewerKey key) {
     case ViewerKey::kToggleHelp: help_visible_ = !help_visible_; break;
     case ViewerKey::kToggleUi: ui_visible_ = !ui_visible_; break;
     case ViewerKey::kQuit: quit_requested_ = true; break;
+    case ViewerKey::kFinishTool: break;  // the tools' key: the window hands it to ViewerTools
   }
 }
 

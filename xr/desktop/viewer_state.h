@@ -32,7 +32,8 @@ OrbitCamera orbit_for_camera(const CameraState& c, double unit);
 
 // Keys the viewer reacts to, independent of the window system.
 enum class ViewerKey { kResetView, kAxisX, kAxisY, kAxisZ, kNextModel, kNextColormap, kTimeNext, kTimePrev,
-                       kPlayPause, kStepBack, kStepForward, kSlower, kFaster, kToggleHelp, kToggleUi, kQuit };
+                       kPlayPause, kStepBack, kStepForward, kSlower, kFaster, kToggleHelp, kToggleUi, kQuit,
+                       kFinishTool };  // ends the trace chain or the track (the window's tools act on it)
 
 struct ShortcutHelp {
   const char* keys;
