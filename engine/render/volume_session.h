@@ -91,9 +91,11 @@ Result<SessionFlags> complete_session_flags(SessionFlags flags);
 // without settings gets its own (a copy of channel 0's with a distinct colour
 // per channel) and, unless given, its window from `auto_window(source
 // channel)` at the drawn timepoint. A channel whose colour is the default's
-// choice (no --colormap for it, not set by --settings or a card) takes the
-// file's colour when `display` (the source's VolumeInfo::channel_display,
-// indexed by source channel) states one: the single hue "#rrggbb".
+// choice (no --colormap for it, not set by --settings or a card; a settings
+// file's "gray", RenderSettings' own default, counts as unset, as it does
+// for the generated hues) takes the file's colour when `display` (the
+// source's VolumeInfo::channel_display, indexed by source channel) states
+// one: the single hue "#rrggbb".
 struct DrawnSettings {
   RenderSettings settings;
   std::vector<uint32_t> channels;
