@@ -13,6 +13,7 @@
 #include "cli_runner.h"
 #include "core/image.h"
 #include "render/colormap.h"
+#include "render/still_render.h"
 #include "render/volume_session.h"
 #include "volume/channel_display.h"
 #include "volume/container_format.h"
@@ -201,6 +202,16 @@ TEST_CASE("channel display: the session draws a channel in the file's colour unl
   auto h = open_volume_session(kColoured, hot);
   REQUIRE(h.is_ok());
   CHECK(h->settings.channels[0].colormap == "hot");
+
+  // The comparison renderers (vxr render --renderer dense / --reference) resolve the same colour.
+  DenseStillOptions dense;
+  dense.width = 16, dense.height = 16;
+  dense.renderer = DenseRenderer::kReference;
+  auto still = render_still_dense(nullptr, kColoured, none,
+                                  [](const VolumePlacement& p, bool) -> Result<Camera> { return orbit_camera(p, 30, 25); },
+                                  dense);
+  REQUIRE_MESSAGE(still.is_ok(), still.status().to_string());
+  CHECK(still->settings == s->settings);
 
   // The same file imported: the container's header carries the colour to the same default.
   const fs::path dir = scratch_dir("channel_display", "session");
