@@ -654,6 +654,37 @@ TEST_CASE("importers: Imaris every channel and timepoint, cropped from chunk pad
     }
 }
 
+TEST_CASE("importers: Imaris DataSetInfo/Channel N Name, Color and ColorRange become the channel display metadata") {
+  const fs::path dir = scratch("ims_channels");
+  const fs::path path = dir / "named.ims";
+  REQUIRE(write_small_ims(path, 0));
+  {
+    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    REQUIRE(f >= 0);
+    const hid_t info = H5Gopen2(f, "DataSetInfo", H5P_DEFAULT);
+    const hid_t c0 = H5Gcreate2(info, "Channel 0", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    ims_attr(c0, "Name", "Hoechst");
+    ims_attr(c0, "Color", "0 0.5 1");
+    ims_attr(c0, "ColorRange", "100 1800");
+    H5Gclose(c0);
+    const hid_t c1 = H5Gcreate2(info, "Channel 1", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    ims_attr(c1, "Color", "1 0 0 0.5");  // not "r g b": ignored, not an error
+    ims_attr(c1, "ColorRange", "5 5");     // empty range: ignored
+    H5Gclose(c1);
+    H5Gclose(info);
+    H5Fclose(f);
+  }
+  auto s = open_ok(path.string());
+  const VolumeInfo& i = s->info();
+  REQUIRE(i.channel_display.size() == 2);
+  CHECK(i.channel_display[0].name == "Hoechst");
+  CHECK(i.channel_display[0].color == std::array<uint8_t, 3>{0, 128, 255});
+  CHECK(i.channel_display[0].window == std::array<double, 2>{100, 1800});
+  CHECK(i.channel_display[1].empty());
+  // The real Imaris sample has no DataSetInfo/Channel groups: nothing stated.
+  CHECK(open_ok(kData + "/imaris/Minimal_IMS_File.ims")->info().channel_display.empty());
+}
+
 TEST_CASE("importers: an Imaris file that needs the LZ4 filter (32004) says so when HDF5 lacks it") {
   if (H5Zfilter_avail(32004) > 0) {
     MESSAGE("this HDF5 has the LZ4 filter; nothing to check");

@@ -12,6 +12,7 @@
 #include "golden.h"
 #include "render/volume_session.h"
 #include "volume/load_dense.h"
+#include "xr/view_command.h"
 
 using namespace vxr;
 using namespace vxr::test;
@@ -183,4 +184,44 @@ TEST_CASE("session: vxr view --channel --settings draws what vxr render draws, a
   bad = run_vxr("view " + q(kThreeChannels) + " --headless --frames 1 --settings " + q(dir / "nowhere.json"), dir, 120);
   CHECK(bad.rc == 2);
   CHECK(bad.err.find("nowhere.json") != std::string::npos);
+}
+
+TEST_CASE("view command: option errors are usage failures found before any volume is read; a run reports what it drew") {
+  std::vector<std::string> info, notes;
+  const xr::ViewReport report{[&](const std::string& line) { info.push_back(line); },
+                              [&](const std::string& line) { notes.push_back(line); }};
+  xr::ViewFailure failure = xr::ViewFailure::kWork;
+  xr::ViewCommandOptions o;
+  o.input = "/nonexistent/volume.tif";
+  o.ui_script = "steps.json";  // the desktop's, without --desktop: refused before the missing input is noticed
+  Status st = xr::run_view_command(o, report, &failure);
+  REQUIRE_FALSE(st.is_ok());
+  CHECK(failure == xr::ViewFailure::kUsage);
+  CHECK(st.message().find("--ui-script runs in the desktop window") != std::string::npos);
+
+  o = xr::ViewCommandOptions{};
+  o.input = "/nonexistent/volume.tif";
+  o.target = xr::TargetKind::kHeadless;
+  failure = xr::ViewFailure::kWork;
+  st = xr::run_view_command(o, report, &failure);
+  REQUIRE_FALSE(st.is_ok());
+  CHECK(failure == xr::ViewFailure::kUsage);  // a wrong path is the caller's
+  CHECK(st.message().find("volume.tif") != std::string::npos);
+  CHECK(info.empty());
+
+  o = xr::ViewCommandOptions{};
+  o.input = kThreeChannels;
+  o.target = xr::TargetKind::kHeadless;
+  o.frames = 2;
+  o.width = 32;
+  o.height = 24;
+  st = xr::run_view_command(o, report, &failure);
+  REQUIRE_MESSAGE(st.is_ok(), st.to_string());
+  REQUIRE(info.size() == 3);
+  CHECK(info[0] == "using headless (--headless)");
+  CHECK(info[1].rfind("2 frames rendered on headless", 0) == 0);
+  CHECK(info[2].rfind("volume at (", 0) == 0);
+  bool shown = false;
+  for (const std::string& n : notes) shown = shown || n == kThreeChannels + ": showing channel(s) 0,1,2 of timepoint 0 (of 3 channels, 1 timepoints)";
+  CHECK(shown);
 }

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "command.h"
+#include "volume/channel_display.h"
 #include "volume/container_reader.h"
 #include "volume/importers/import_source.h"
 #include "volume/open_chunk_source.h"
@@ -11,15 +12,46 @@
 namespace vxr::cli {
 namespace {
 
-// The fields every `info --json` has, whatever holds the volume.
+// What the file states about showing each channel, as JSON: one object per
+// channel with the fields stated (name, color "#rrggbb", window [lo, hi]).
+nlohmann::json channel_display_json(const VolumeInfo& i) {
+  nlohmann::json list = nlohmann::json::array();
+  for (uint32_t c = 0; c < i.channel_display.size(); ++c) {
+    const ChannelDisplay& d = i.channel_display[c];
+    nlohmann::json j = {{"channel", c}};
+    if (!d.name.empty()) j["name"] = d.name;
+    if (d.color) j["color"] = color_hex(*d.color);
+    if (d.window) j["window"] = {(*d.window)[0], (*d.window)[1]};
+    list.push_back(std::move(j));
+  }
+  return list;
+}
+
+// The fields every `info --json` has, whatever holds the volume (channel_display only when the file states it).
 nlohmann::json volume_info_json(const VolumeInfo& i) {
-  return {{"dims", {i.dims[0], i.dims[1], i.dims[2]}},
-          {"dtype", dtype_name(i.dtype)},
-          {"channels", i.channels},
-          {"timepoints", i.timepoints},
-          {"voxel_size", {i.voxel_size[0], i.voxel_size[1], i.voxel_size[2]}},
-          {"origin", {i.origin[0], i.origin[1], i.origin[2]}},
-          {"unit", i.unit}};
+  nlohmann::json j = {{"dims", {i.dims[0], i.dims[1], i.dims[2]}},
+                      {"dtype", dtype_name(i.dtype)},
+                      {"channels", i.channels},
+                      {"timepoints", i.timepoints},
+                      {"voxel_size", {i.voxel_size[0], i.voxel_size[1], i.voxel_size[2]}},
+                      {"origin", {i.origin[0], i.origin[1], i.origin[2]}},
+                      {"unit", i.unit}};
+  if (!i.channel_display.empty()) j["channel_display"] = channel_display_json(i);
+  return j;
+}
+
+// "name \"DAPI\", colour #0000ff, window 100..2000": what the file states about channel c.
+std::string channel_display_text(const ChannelDisplay& d) {
+  std::string s;
+  auto add = [&](const std::string& part) { s += (s.empty() ? "" : ", ") + part; };
+  if (!d.name.empty()) add("name \"" + d.name + "\"");
+  if (d.color) add("colour " + color_hex(*d.color));
+  if (d.window) {
+    char w[80];
+    std::snprintf(w, sizeof w, "window %g..%g", (*d.window)[0], (*d.window)[1]);
+    add(w);
+  }
+  return s;
 }
 
 // The lines every text `info` has: dims, dtype, channels, timepoints, voxel size, origin (when set).
@@ -31,6 +63,9 @@ void print_volume_info_text(const VolumeInfo& i) {
   std::printf("voxel size:  %g x %g x %g %s\n", i.voxel_size[0], i.voxel_size[1], i.voxel_size[2], i.unit.c_str());
   if (i.origin != std::array<double, 3>{0, 0, 0})
     std::printf("origin:      %g, %g, %g %s\n", i.origin[0], i.origin[1], i.origin[2], i.unit.c_str());
+  for (uint32_t c = 0; c < i.channel_display.size(); ++c)
+    if (!i.channel_display[c].empty())
+      std::printf("%-13s%s\n", ("channel " + std::to_string(c) + ":").c_str(), channel_display_text(i.channel_display[c]).c_str());
 }
 
 // Units and paths come from files: bytes that are not UTF-8 print as U+FFFD instead of throwing.

@@ -10,6 +10,7 @@
 #include "core/status.h"
 #include "gpu/context.h"
 #include "render/camera.h"
+#include "render/card_scene.h"
 #include "scene/render_settings.h"
 
 namespace vxr::cli {
@@ -46,17 +47,6 @@ int import_volume(const std::vector<std::string>& inputs, const std::string& out
 // Shared by `vxr render` and `vxr view` (tools/scene_flags.cpp):
 // --annotations STORE.
 void add_annotations_option(CLI::App* cmd, std::string& store);
-// A card's Scene: "STORE:ID", or "ID" of the --annotations store, else of
-// the project folder given as the input (either may be empty).
-Result<Scene> load_card_scene(const std::string& spec, const std::string& annotations_flag = "",
-                              const std::string& input = "");
-// The camera a Scene is drawn with, in the volume frame the renderers use:
-// its own (or the default orbit view; `flat`: a single slice seen from
-// above), then its volume transform undone.
-Camera scene_camera(const Scene& scene, const VolumePlacement& placement, bool flat);
-// `world` (the volume placed by `transform`) as the renderers see it: the
-// volume at the origin and the camera moved the opposite way.
-Camera camera_in_volume_frame(const Camera& world, const VolumeTransform& transform);
 
 // Opens the Vulkan device (VXR_DEVICE, VXR_VALIDATION from the environment).
 Result<std::unique_ptr<gpu::Context>> open_gpu();

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "assets/assets.h"
+#include "volume/channel_display.h"
 
 namespace vxr {
 namespace {
@@ -42,6 +43,11 @@ std::optional<ColormapTable> embedded(std::string_view name) {
   return t;
 }
 
+// "#rrggbb" (the '#' required, so a colormap name is never taken for hex).
+std::optional<Rgb8> color_hex_name(std::string_view name) {
+  return name.size() == 7 && name[0] == '#' ? color_from_hex(name) : std::nullopt;
+}
+
 }  // namespace
 
 std::optional<ColormapTable> find_colormap(std::string_view name) {
@@ -53,6 +59,7 @@ std::optional<ColormapTable> find_colormap(std::string_view name) {
   if (name == "cyan") return hue({0, 1, 1});
   if (name == "magenta") return hue({1, 0, 1});
   if (name == "yellow") return hue({1, 1, 0});
+  if (auto rgb = color_hex_name(name)) return hue(glm::dvec3((*rgb)[0], (*rgb)[1], (*rgb)[2]) / 255.0);
   if (name == "viridis" || name == "magma" || name == "inferno" || name == "plasma" || name == "turbo")
     return embedded(name);
   return std::nullopt;

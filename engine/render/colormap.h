@@ -2,7 +2,8 @@
 //
 // viridis, magma, inferno, plasma and turbo are matplotlib's published tables
 // (assets/colormaps/, licences in LICENSE.md there), embedded in the binary;
-// gray, hot and the single-hue maps (black to the full hue) are generated.
+// gray, hot and the single-hue maps (black to the full hue) are generated;
+// "#rrggbb" names the single hue of that colour (a file's channel colour).
 #pragma once
 
 #include <array>

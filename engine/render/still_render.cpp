@@ -128,7 +128,8 @@ Result<DenseStill> render_still_dense(gpu::Context* gpu, const std::string& inpu
                        resolve_drawn_settings(std::move(choice), flags, input, static_cast<uint32_t>(channels.size()), 1,
                                               [&](uint32_t c) -> Result<std::pair<double, double>> {
                                                 return percentile_window(channels[c]);
-                                              }));
+                                              },
+                                              loaded.channel_display));
   for (std::string& n : drawn.notes) out.notes.push_back(std::move(n));
   std::vector<DenseVolume> picked;
   for (uint32_t c : drawn.channels) picked.push_back(std::move(channels[c]));

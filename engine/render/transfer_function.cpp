@@ -84,7 +84,7 @@ Status validate_render_settings(const RenderSettings& s, uint32_t channel_count)
     if (!find_colormap(ch.colormap)) {
       std::string names;
       for (const auto& n : colormap_names()) names += (names.empty() ? "" : ", ") + n;
-      return invalid_argument(at + "colormap: unknown colormap '" + ch.colormap + "' (known: " + names + ")");
+      return invalid_argument(at + "colormap: unknown colormap '" + ch.colormap + "' (known: " + names + ", or #rrggbb for one hue)");
     }
     double last = -1.0;
     for (const auto& p : ch.color_points) {

@@ -9,6 +9,7 @@
 #include "annotate/project.h"
 #include "assets/assets.h"
 #include "render/transfer_function.h"
+#include "volume/channel_display.h"
 #include "volume/container_reader.h"
 #include "volume/dense_chunk_source.h"
 #include "volume/load_dense.h"
@@ -243,7 +244,8 @@ Status check_timepoint(const std::string& input, uint32_t timepoint, uint32_t ti
 }
 
 Result<DrawnSettings> resolve_drawn_settings(SettingsChoice choice, const SessionFlags& flags, const std::string& input,
-                                             uint32_t volume_channels, uint32_t timepoints, const AutoWindow& auto_window) {
+                                             uint32_t volume_channels, uint32_t timepoints, const AutoWindow& auto_window,
+                                             const std::vector<ChannelDisplay>& display) {
   DrawnSettings out;
   VXR_ASSIGN_OR_RETURN(out.channels, parse_channel_flag(flags.channel, input, volume_channels));
   VXR_RETURN_IF_ERROR(check_timepoint(input, flags.timepoint, timepoints));
@@ -255,15 +257,29 @@ Result<DrawnSettings> resolve_drawn_settings(SettingsChoice choice, const Sessio
   // Channels without settings get their own: a distinct colour each (a copy
   // of channel 0's settings otherwise, window included).
   const char* hues[4] = {"green", "magenta", "cyan", "yellow"};
+  // The file's colour for drawn channel c, when it states one.
+  auto file_color = [&](size_t c) -> std::optional<std::string> {
+    const uint32_t source_channel = out.channels[c];
+    if (source_channel >= display.size() || !display[source_channel].color) return std::nullopt;
+    return color_hex(*display[source_channel].color);
+  };
   for (size_t c = s.channels.size(); c < n; ++c) {
     ChannelSettings ch = s.channels[0];
-    ch.colormap = n > 1 ? hues[c] : ch.colormap;
+    ch.colormap = file_color(c).value_or(n > 1 ? hues[c] : ch.colormap);
     ch.color_points.clear();
     s.channels.push_back(ch);
   }
   if (s.channels.size() > n) s.channels.resize(n);
-  if (n > 1 && !choice.colormap_given && (choice.defaults || s.channels[0].colormap == "gray"))
+  // Channel 0's colour is the default's when neither --colormap nor a settings file chose it
+  // (a settings file that leaves it at RenderSettings' "gray" did not choose it either).
+  const bool colour0_unchosen =
+      !choice.colormap_given && (choice.defaults || (s.channels[0].colormap == "gray" && s.channels[0].color_points.empty()));
+  if (colour0_unchosen && file_color(0)) {
+    s.channels[0].colormap = *file_color(0);
+    s.channels[0].color_points.clear();
+  } else if (n > 1 && !choice.colormap_given && (choice.defaults || s.channels[0].colormap == "gray")) {
     s.channels[0].colormap = hues[0];
+  }
   for (size_t c = 0; c < n && !choice.window_given; ++c) {
     VXR_ASSIGN_OR_RETURN(const auto w, auto_window(out.channels[c]));
     s.channels[c].window_lo = w.first;
@@ -377,7 +393,9 @@ Result<VolumeSession> open_volume_session(const std::string& given, const Sessio
     std::vector<std::vector<DenseVolume>> series;
     series.push_back(std::move(loaded.channels));
     for (auto& t : loaded.later_timepoints) series.push_back(std::move(t));
-    VXR_ASSIGN_OR_RETURN(out.source, DenseChunkSource::create_series(std::move(series)));
+    VXR_ASSIGN_OR_RETURN(std::shared_ptr<DenseChunkSource> dense, DenseChunkSource::create_series(std::move(series)));
+    VXR_RETURN_IF_ERROR(dense->set_channel_display(std::move(loaded.channel_display)));
+    out.source = std::move(dense);
   }
   if (voxel_size) out.source = with_voxel_size(out.source, *voxel_size);
   const VolumeInfo& info = out.source->info();
@@ -391,7 +409,8 @@ Result<VolumeSession> open_volume_session(const std::string& given, const Sessio
     return percentile_window(dense);
   };
   VXR_ASSIGN_OR_RETURN(DrawnSettings drawn, resolve_drawn_settings(std::move(choice), flags, given.empty() ? "the sample" : given,
-                                                                   info.channels, info.timepoints, auto_window));
+                                                                   info.channels, info.timepoints, auto_window,
+                                                                   info.channel_display));
   out.settings = std::move(drawn.settings);
   out.channels = std::move(drawn.channels);
   out.timepoint = flags.timepoint;

@@ -88,9 +88,14 @@ Result<SessionFlags> complete_session_flags(SessionFlags flags);
 
 // The settings for the channels drawn: --channel (default: the first up to
 // 4, noted when there are more), --timepoint checked, then each drawn channel
-// without settings gets its own (a distinct colour per channel; a copy of
-// channel 0's otherwise) and, unless given, its window from
-// `auto_window(source channel)` at the drawn timepoint.
+// without settings gets its own (a copy of channel 0's with a distinct colour
+// per channel) and, unless given, its window from `auto_window(source
+// channel)` at the drawn timepoint. A channel whose colour is the default's
+// choice (no --colormap for it, not set by --settings or a card; a settings
+// file's "gray", RenderSettings' own default, counts as unset, as it does
+// for the generated hues) takes the file's colour when `display` (the
+// source's VolumeInfo::channel_display, indexed by source channel) states
+// one: the single hue "#rrggbb".
 struct DrawnSettings {
   RenderSettings settings;
   std::vector<uint32_t> channels;
@@ -98,7 +103,8 @@ struct DrawnSettings {
 };
 using AutoWindow = std::function<Result<std::pair<double, double>>(uint32_t channel)>;
 Result<DrawnSettings> resolve_drawn_settings(SettingsChoice choice, const SessionFlags& flags, const std::string& input,
-                                             uint32_t volume_channels, uint32_t timepoints, const AutoWindow& auto_window);
+                                             uint32_t volume_channels, uint32_t timepoints, const AutoWindow& auto_window,
+                                             const std::vector<ChannelDisplay>& display = {});
 
 // --channel "2" or "0,2": at most VXR_MAX_CHANNELS channels of `input`'s, each once.
 Result<std::vector<uint32_t>> parse_channel_flag(const std::string& text, const std::string& input,

@@ -1,10 +1,11 @@
-// On-disk layout of the .vxc container, version 1 (spec: docs/container-format.md).
+// On-disk layout of the .vxc container, versions 1 and 2 (spec: docs/container-format.md).
 //
 // All integers little-endian, all sizes and offsets 64-bit. The structs below
 // are the exact byte layout (naturally aligned, no implicit padding; checked by
 // static_assert), written and read with memcpy on little-endian hosts.
 //
-//   [FileHeader][LevelRecord x levels][u64 header checksum]
+//   [FileHeader][LevelRecord x levels][u64 header checksum]                        version 1
+//   [FileHeader][LevelRecord x levels][ChannelBlock][ChannelRecord x n][u64 header checksum]  version 2
 //   [RecordHeader][payload] ... appended in any order, one per chunk
 //   [IndexHeader][IndexEntry x count]
 //   [Footer]
@@ -18,7 +19,13 @@ static_assert(std::endian::native == std::endian::little, "the .vxc reader/write
 
 namespace vxr::vxc {
 
-constexpr uint32_t kVersion = 1;
+// The newest version this code reads. The writer writes version 1 unless the
+// volume has channel display metadata (names, colours, windows): version 2
+// adds the channel block, so files without it stay readable by older vxr.
+constexpr uint32_t kVersion = 2;
+constexpr uint32_t kVersionChannels = 2;  // the first version with a channel block
+// Channel records kept at most (channels past it have none): bounds the header.
+constexpr uint32_t kMaxChannelRecords = 1024;
 constexpr uint32_t kMaxLevels = 48;
 inline constexpr char kFileMagic[8] = {'V', 'X', 'C', 'V', 'O', 'L', '\r', '\n'};
 inline constexpr char kRecordMagic[8] = {'V', 'X', 'C', 'C', 'H', 'U', 'N', 'K'};
@@ -61,6 +68,29 @@ struct LevelRecord {
   uint32_t downsample[3];
 };
 static_assert(sizeof(LevelRecord) == 48);
+
+// Version 2, after the level records: how many ChannelRecords follow.
+struct ChannelBlock {
+  uint32_t count;         // records for channels 0..count-1; count <= min(channels, kMaxChannelRecords)
+  uint32_t record_bytes;  // sizeof(ChannelRecord)
+};
+static_assert(sizeof(ChannelBlock) == 8);
+
+// One channel's display metadata (VolumeInfo::channel_display).
+enum ChannelFlags : uint8_t { kHasColor = 1, kHasWindow = 2 };
+struct ChannelRecord {
+  char name[64];      // UTF-8, NUL-padded; at most 63 bytes (empty: none)
+  uint8_t color[3];   // RGB when flags has kHasColor, else zero
+  uint8_t flags;      // ChannelFlags
+  uint32_t reserved0;
+  double window[2];   // display lo < hi in data units when flags has kHasWindow, else zero
+  uint64_t reserved1;
+};
+static_assert(sizeof(ChannelRecord) == 96);
+
+// The largest header any version holds: what a reader reads before parsing it.
+constexpr uint64_t kMaxHeaderBytes =
+    sizeof(FileHeader) + kMaxLevels * sizeof(LevelRecord) + sizeof(ChannelBlock) + kMaxChannelRecords * sizeof(ChannelRecord) + 8;
 
 struct RecordHeader {
   char magic[8];

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/checked_math.h"
+#include "volume/channel_display.h"
 
 namespace vxr {
 
@@ -96,6 +97,9 @@ Result<ContainerLayout> make_layout(const VolumeInfo& info, uint32_t chunk_size,
   }
   if (info.channels == 0 || info.timepoints == 0) return invalid_argument("channels and timepoints must be >= 1");
   if (info.unit.size() > 15) return invalid_argument("unit '" + info.unit + "' is longer than 15 bytes");
+  if (!info.channel_display.empty() && info.channel_display.size() != info.channels)
+    return invalid_argument("channel display metadata for " + std::to_string(info.channel_display.size()) +
+                            " channels, but the volume has " + std::to_string(info.channels));
   ContainerLayout layout;
   layout.info = info;
   layout.chunk_size = chunk_size;
@@ -106,13 +110,65 @@ Result<ContainerLayout> make_layout(const VolumeInfo& info, uint32_t chunk_size,
   return layout;
 }
 
+namespace {
+
+// Channel records a version-2 header holds for `info`: up to the last channel
+// with display metadata, at most kMaxChannelRecords.
+uint32_t channel_records(const VolumeInfo& info) {
+  uint32_t n = 0;
+  for (uint32_t c = 0; c < std::min<uint32_t>(info.channels, vxc::kMaxChannelRecords); ++c)
+    if (!info.display(c).empty()) n = c + 1;
+  return n;
+}
+
+uint64_t header_size(uint32_t version, uint32_t levels, uint32_t records) {
+  const uint64_t base = sizeof(vxc::FileHeader) + uint64_t(levels) * sizeof(vxc::LevelRecord) + 8;
+  return version < vxc::kVersionChannels ? base : base + sizeof(vxc::ChannelBlock) + uint64_t(records) * sizeof(vxc::ChannelRecord);
+}
+
+vxc::ChannelRecord channel_record(const ChannelDisplay& d) {
+  vxc::ChannelRecord r;
+  std::memset(&r, 0, sizeof r);
+  std::memcpy(r.name, d.name.data(), std::min<size_t>(d.name.size(), sizeof r.name - 1));
+  if (d.color) {
+    r.flags |= vxc::kHasColor;
+    for (int i = 0; i < 3; ++i) r.color[i] = (*d.color)[i];
+  }
+  if (d.window) {
+    r.flags |= vxc::kHasWindow;
+    r.window[0] = (*d.window)[0];
+    r.window[1] = (*d.window)[1];
+  }
+  return r;
+}
+
+// A record back into display metadata; kCorrupt naming `what` and the channel when a field is impossible.
+Result<ChannelDisplay> channel_display(const vxc::ChannelRecord& r, uint32_t channel, const std::string& what) {
+  const std::string at = what + ": header channel record " + std::to_string(channel);
+  if (r.flags & ~(vxc::kHasColor | vxc::kHasWindow)) return corrupt(at + " has unknown flags; the file is damaged");
+  if (strnlen(r.name, sizeof r.name) == sizeof r.name) return corrupt(at + " has an unterminated name; the file is damaged");
+  ChannelDisplay d;
+  d.name = r.name;
+  if (r.flags & vxc::kHasColor) d.color = Rgb8{r.color[0], r.color[1], r.color[2]};
+  if (r.flags & vxc::kHasWindow) {
+    if (!std::isfinite(r.window[0]) || !std::isfinite(r.window[1]) || !(r.window[1] > r.window[0]))
+      return corrupt(at + " has a window that is not lo < hi; the file is damaged");
+    d.window = std::array<double, 2>{r.window[0], r.window[1]};
+  }
+  return d;
+}
+
+}  // namespace
+
 std::vector<uint8_t> serialize_header(const ContainerLayout& layout) {
   vxc::FileHeader h;
   std::memset(&h, 0, sizeof h);
   std::memcpy(h.magic, vxc::kFileMagic, 8);
-  h.version = vxc::kVersion;
+  const uint32_t records = channel_records(layout.info);
+  // Version 1 when there is nothing for the channel block: such files stay readable by older vxr.
+  h.version = records ? vxc::kVersionChannels : 1;
   const uint32_t nlev = static_cast<uint32_t>(layout.levels.size());
-  h.header_bytes = static_cast<uint32_t>(sizeof(vxc::FileHeader) + nlev * sizeof(vxc::LevelRecord) + 8);
+  h.header_bytes = static_cast<uint32_t>(header_size(h.version, nlev, records));
   for (int a = 0; a < 3; ++a) {
     h.dims[a] = layout.info.dims[a];
     h.voxel_size[a] = layout.info.voxel_size[a];
@@ -138,6 +194,15 @@ std::vector<uint8_t> serialize_header(const ContainerLayout& layout) {
     }
     std::memcpy(out.data() + sizeof h + l * sizeof r, &r, sizeof r);
   }
+  if (records) {
+    uint8_t* at = out.data() + sizeof h + nlev * sizeof(vxc::LevelRecord);
+    const vxc::ChannelBlock block{records, uint32_t(sizeof(vxc::ChannelRecord))};
+    std::memcpy(at, &block, sizeof block);
+    for (uint32_t c = 0; c < records; ++c) {
+      const vxc::ChannelRecord r = channel_record(layout.info.display(c));
+      std::memcpy(at + sizeof block + c * sizeof r, &r, sizeof r);
+    }
+  }
   const uint64_t sum = vxc::checksum(out.data(), out.size() - 8);
   std::memcpy(out.data() + out.size() - 8, &sum, 8);
   return out;
@@ -156,8 +221,19 @@ Result<ContainerLayout> parse_header(std::span<const uint8_t> bytes, const std::
   if (h.version == 0 || h.version > vxc::kVersion)
     return unsupported(what + ": container version " + std::to_string(h.version) +
                        " is newer than this vxr reads (" + std::to_string(vxc::kVersion) + "); update vxr");
-  if (h.levels == 0 || h.levels > vxc::kMaxLevels ||
-      h.header_bytes != sizeof h + h.levels * sizeof(vxc::LevelRecord) + 8)
+  if (h.levels == 0 || h.levels > vxc::kMaxLevels)
+    return corrupt(what + ": header is damaged (level count / header size)");
+  // Version 2: the channel block after the level records says how many records follow.
+  const uint64_t block_at = sizeof h + uint64_t(h.levels) * sizeof(vxc::LevelRecord);
+  vxc::ChannelBlock block{0, uint32_t(sizeof(vxc::ChannelRecord))};
+  if (h.version >= vxc::kVersionChannels) {
+    if (bytes.size() < block_at + sizeof block) return corrupt(what + ": header is truncated");
+    std::memcpy(&block, bytes.data() + block_at, sizeof block);
+    if (block.record_bytes != sizeof(vxc::ChannelRecord) || block.count > vxc::kMaxChannelRecords ||
+        block.count > h.channels)
+      return corrupt(what + ": header is damaged (channel block)");
+  }
+  if (h.header_bytes != header_size(h.version, h.levels, block.count))
     return corrupt(what + ": header is damaged (level count / header size)");
   if (bytes.size() < h.header_bytes) return corrupt(what + ": header is truncated");
   uint64_t stored;
@@ -209,6 +285,14 @@ Result<ContainerLayout> parse_header(std::span<const uint8_t> bytes, const std::
   }
   for (int a = 0; a < 3; ++a)
     if (L.levels[0].dims[a] != L.info.dims[a]) return corrupt(what + ": level 0 dims differ from the volume dims");
+  if (block.count) {
+    L.info.channel_display.resize(L.info.channels);
+    for (uint32_t c = 0; c < block.count; ++c) {
+      vxc::ChannelRecord r;
+      std::memcpy(&r, bytes.data() + block_at + sizeof block + c * sizeof r, sizeof r);
+      VXR_ASSIGN_OR_RETURN(L.info.channel_display[c], channel_display(r, c, what));
+    }
+  }
   // Every count the reader and verifier derive (index size, positions) must
   // fit comfortably in 64 bits; a real index this large would not fit on disk.
   const auto chunks = checked_product({L.total_chunks(), uint64_t(sizeof(vxc::IndexEntry))});

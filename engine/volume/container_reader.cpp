@@ -13,8 +13,7 @@ Result<std::unique_ptr<ContainerReader>> ContainerReader::open(const std::string
   VXR_ASSIGN_OR_RETURN(r->file_, ContainerFile::open_read(path));
   VXR_ASSIGN_OR_RETURN(const uint64_t size, r->file_.size());
   r->file_bytes_ = size;
-  constexpr uint64_t kMaxHeader = sizeof(vxc::FileHeader) + vxc::kMaxLevels * sizeof(vxc::LevelRecord) + 8;
-  std::vector<uint8_t> head(std::min<uint64_t>(size, kMaxHeader));
+  std::vector<uint8_t> head(std::min<uint64_t>(size, vxc::kMaxHeaderBytes));
   VXR_RETURN_IF_ERROR(r->file_.read_at(head.data(), head.size(), 0));
   uint64_t header_bytes = 0;
   VXR_ASSIGN_OR_RETURN(r->layout_, parse_header(head, path, &header_bytes));

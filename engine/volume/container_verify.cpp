@@ -20,8 +20,7 @@ VerifyReport verify_container(const std::string& path) {
     return rep;
   }
   const uint64_t size = *size_r;
-  constexpr uint64_t kMaxHeader = sizeof(vxc::FileHeader) + vxc::kMaxLevels * sizeof(vxc::LevelRecord) + 8;
-  std::vector<uint8_t> head(std::min<uint64_t>(size, kMaxHeader));
+  std::vector<uint8_t> head(std::min<uint64_t>(size, vxc::kMaxHeaderBytes));
   if (Status s = file->read_at(head.data(), head.size(), 0); !s) {
     rep.problems.push_back(s.message());
     return rep;

@@ -57,8 +57,7 @@ Result<std::unique_ptr<ContainerWriter>> ContainerWriter::create(const std::stri
   if (exists) {
     VXR_ASSIGN_OR_RETURN(w->file_, ContainerFile::open_write(w->partial_, false));
     VXR_ASSIGN_OR_RETURN(const uint64_t size, w->file_.size());
-    constexpr uint64_t kMaxHeader = sizeof(vxc::FileHeader) + vxc::kMaxLevels * sizeof(vxc::LevelRecord) + 8;
-    std::vector<uint8_t> have(std::min<uint64_t>(size, kMaxHeader));
+    std::vector<uint8_t> have(std::min<uint64_t>(size, vxc::kMaxHeaderBytes));
     VXR_RETURN_IF_ERROR(w->file_.read_at(have.data(), have.size(), 0));
     uint64_t hb = 0;
     auto parsed = parse_header(have, w->partial_, &hb);

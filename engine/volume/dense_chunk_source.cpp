@@ -162,4 +162,12 @@ Result<std::shared_ptr<const Chunk>> DenseChunkSource::read(const ChunkKey& key)
   return std::shared_ptr<const Chunk>(std::move(c));
 }
 
+Status DenseChunkSource::set_channel_display(std::vector<ChannelDisplay> display) {
+  if (!display.empty() && display.size() != info_.channels)
+    return invalid_argument("channel display metadata for " + std::to_string(display.size()) + " channels, but the volume has " +
+                            std::to_string(info_.channels));
+  info_.channel_display = std::move(display);
+  return Status::ok();
+}
+
 }  // namespace vxr

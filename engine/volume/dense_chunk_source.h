@@ -24,6 +24,9 @@ class DenseChunkSource final : public ChunkSource {
   static Result<std::shared_ptr<DenseChunkSource>> create_series(std::vector<std::vector<DenseVolume>> timepoints,
                                                                  uint32_t chunk_size = 64, uint32_t apron = 2);
 
+  // The file's channel names and colours (empty, or one per channel), shown in info().
+  Status set_channel_display(std::vector<ChannelDisplay> display);
+
   const VolumeInfo& info() const override { return info_; }
   const std::vector<LevelInfo>& levels() const override { return levels_; }
   uint32_t chunk_size() const override { return cs_; }

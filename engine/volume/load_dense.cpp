@@ -59,6 +59,12 @@ DenseVolume shrink_by_two(const DenseVolume& v) {
   return out;
 }
 
+// The display metadata of channels 0..n-1 of `info` (empty when it has none).
+static std::vector<ChannelDisplay> first_channels_display(const VolumeInfo& info, uint32_t n) {
+  if (info.channel_display.empty()) return {};
+  return {info.channel_display.begin(), info.channel_display.begin() + std::min<size_t>(n, info.channel_display.size())};
+}
+
 // A .vxc or OME-Zarr: the finest pyramid level that fits, read chunk by chunk (no shrinking in memory).
 static Result<LoadedVolume> load_chunk_source_level(const std::string& path, uint32_t max_dim, uint64_t max_bytes) {
   VXR_ASSIGN_OR_RETURN(OpenedChunkSource opened, open_chunk_source(path));
@@ -77,6 +83,7 @@ static Result<LoadedVolume> load_chunk_source_level(const std::string& path, uin
     VXR_ASSIGN_OR_RETURN(DenseVolume v, read_level_dense(source, level, c, 0, max_bytes));
     out.channels.push_back(std::move(v));
   }
+  out.channel_display = first_channels_display(info, channels);
   if (level > 0) out.notes.push_back("drawing pyramid level " + std::to_string(level) + " to fit the GPU's limits");
   return out;
 }
@@ -90,6 +97,7 @@ Result<LoadedVolume> load_for_render(const std::string& path, uint32_t max_dim, 
   out.notes = src->warnings();
   const uint32_t channels = std::min<uint32_t>(info.channels, 4);
   if (info.channels > 4) out.notes.push_back("showing the first 4 of " + std::to_string(info.channels) + " channels");
+  out.channel_display = first_channels_display(info, channels);
   const uint64_t bytes = info.voxels_per_volume() * dtype_bytes(info.dtype);
   if (bytes > (uint64_t(8) << 30))
     return unsupported(path + ": " + std::to_string(bytes >> 20) + " MiB per channel is too large to render "

@@ -10,6 +10,7 @@
 
 #include "core/status.h"
 #include "volume/dense_volume.h"
+#include "volume/volume_info.h"
 
 namespace vxr {
 
@@ -21,6 +22,7 @@ struct LoadedVolume {
   uint32_t shrink = 1;                // 1, 2, 4, ...: how much was averaged away to fit
   std::string format;                 // what read it
   std::vector<std::string> notes;     // warnings worth showing
+  std::vector<ChannelDisplay> channel_display;  // the file's, for `channels`; empty: none stated
 };
 
 // max_dim: the device's maxImageDimension3D; max_bytes: per-channel budget.

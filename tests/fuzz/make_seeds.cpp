@@ -5,7 +5,8 @@
 //     && /tmp/make_seeds tests/fuzz/corpus
 // (real third-party seeds, copied from ../shared/testdata, sit beside these; the
 // container seeds are `vxr import <a tiff seed> -o X.vxc --chunk 8`, one with
-// --codec raw, one of a 9^3 all-zero f32 raw sidecar: uniform chunks.)
+// --codec raw, one of a 9^3 all-zero f32 raw sidecar: uniform chunks; channels_v2.vxc
+// is ome-tiff/multifile-master imported so: a version-2 header with a channel record.)
 #include <cstddef>
 #include <cstdio>
 

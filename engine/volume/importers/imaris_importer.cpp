@@ -10,6 +10,9 @@
 #include <fstream>
 #include <mutex>
 
+#include <sstream>
+
+#include "volume/channel_display.h"
 #include "volume/importers/units.h"
 
 namespace vxr {
@@ -90,6 +93,27 @@ std::optional<double> attr_number(hid_t file, const std::string& obj, const char
   const double v = std::strtod(s->c_str(), &end);
   if (end == s->c_str() || !std::isfinite(v)) return std::nullopt;
   return v;
+}
+
+// DataSetInfo/Channel c: Name, Color "r g b" (0..1) and ColorRange "lo hi"
+// (the display window); empty when no channel states any of them.
+std::vector<ChannelDisplay> imaris_channel_display(hid_t file, uint32_t channels) {
+  std::vector<ChannelDisplay> out(channels);
+  bool any = false;
+  for (uint32_t c = 0; c < channels && c < 65536; ++c) {
+    const std::string group = "DataSetInfo/Channel " + std::to_string(c);
+    if (!exists(file, group)) continue;
+    ChannelDisplay& d = out[c];
+    if (const auto name = attr_string(file, group, "Name")) d.name = clean_channel_name(*name);
+    if (const auto color = attr_string(file, group, "Color")) d.color = color_from_unit_floats(*color);
+    if (const auto range = attr_string(file, group, "ColorRange")) {
+      std::istringstream in(*range);
+      double lo = 0, hi = 0;
+      if (in >> lo >> hi && std::isfinite(lo) && std::isfinite(hi) && hi > lo) d.window = std::array<double, 2>{lo, hi};
+    }
+    any = any || !d.empty();
+  }
+  return any ? out : std::vector<ChannelDisplay>{};
 }
 
 std::string data_path(uint32_t t, uint32_t c) {
@@ -267,6 +291,7 @@ Result<std::unique_ptr<SlabSource>> open_imaris_import(const std::string& path) 
       warnings.push_back(path + ": no usable ExtMin" + n + "/ExtMax" + n + "; voxel size along axis " + n + " set to 1");
     }
   }
+  info.channel_display = imaris_channel_display(fid, info.channels);
   closer.keep = true;
   return std::unique_ptr<SlabSource>(new ImarisSource(path, fid, std::move(info), std::move(warnings)));
 }

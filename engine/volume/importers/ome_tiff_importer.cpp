@@ -9,6 +9,7 @@
 #include <pugixml.hpp>
 #include <sstream>
 
+#include "volume/channel_display.h"
 #include "volume/importers/tiff_planes.h"
 #include "core/checked_math.h"
 #include "volume/importers/import_limits.h"
@@ -72,6 +73,21 @@ struct TiffDataRef {
 };
 
 }  // namespace
+
+// Channel@Name and Channel@Color of each channel, in channel order; empty
+// when no Channel element states either (or the elements do not match SizeC).
+std::vector<ChannelDisplay> ome_channel_display(const pugi::xml_node& pixels, uint32_t channels) {
+  const std::vector<pugi::xml_node> elements = children(pixels, "Channel");
+  if (elements.size() != channels) return {};
+  std::vector<ChannelDisplay> out(channels);
+  bool any = false;
+  for (uint32_t c = 0; c < channels; ++c) {
+    out[c].name = clean_channel_name(elements[c].attribute("Name").as_string());
+    if (const pugi::xml_attribute color = elements[c].attribute("Color")) out[c].color = color_from_ome_int(color.as_string());
+    any = any || !out[c].empty();
+  }
+  return any ? out : std::vector<ChannelDisplay>{};
+}
 
 bool looks_like_ome_xml(std::string_view d) {
   if (d.empty() || d.find('<') == std::string_view::npos) return false;
@@ -262,6 +278,7 @@ Result<std::unique_ptr<SlabSource>> open_ome_tiff_import(const std::string& path
     }
     info.voxel_size = {v[0], v[1], v[2]};
   }
+  if (layout.samples == 1) info.channel_display = ome_channel_display(pixels, plane_channels);
   const std::string format =
       layout.files.size() > 1 ? "OME-TIFF (" + std::to_string(layout.files.size()) + " files)" : "OME-TIFF";
   return TiffPlaneSource::create(std::move(layout), format, std::move(warnings), std::move(first_handle));

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "volume/channel_display.h"
 #include "volume/importers/units.h"
 
 namespace vxr::zarr {
@@ -31,6 +32,40 @@ struct GroupAttrs {
   bool is_array = false;
   bool found = false;
 };
+
+// omero.channels[c]: label, color ("RRGGBB"), window {start, end}. Display
+// hints only: a field of the wrong type is skipped, never an error. Empty
+// when nothing usable is stated or the list does not match the channel count.
+std::vector<ChannelDisplay> omero_channel_display(const json& attrs, uint32_t channels,
+                                                  std::vector<std::string>& warnings) {
+  if (!attrs.contains("omero") || !attrs.at("omero").is_object()) return {};
+  const json& omero = attrs.at("omero");
+  if (!omero.contains("channels") || !omero.at("channels").is_array()) return {};
+  const json& list = omero.at("channels");
+  if (list.size() != channels) {
+    warnings.push_back("'omero'.'channels' lists " + std::to_string(list.size()) + " channels, the image has " +
+                       std::to_string(channels) + "; channel names and colours ignored");
+    return {};
+  }
+  std::vector<ChannelDisplay> out(channels);
+  bool any = false;
+  for (uint32_t c = 0; c < channels; ++c) {
+    const json& ch = list[c];
+    if (!ch.is_object()) continue;
+    ChannelDisplay& d = out[c];
+    if (ch.contains("label") && ch.at("label").is_string()) d.name = clean_channel_name(ch.at("label").get<std::string>());
+    if (ch.contains("color") && ch.at("color").is_string()) d.color = color_from_hex(ch.at("color").get<std::string>());
+    if (ch.contains("window") && ch.at("window").is_object()) {
+      const json& w = ch.at("window");
+      if (w.contains("start") && w.contains("end") && w.at("start").is_number() && w.at("end").is_number()) {
+        const double lo = w.at("start").get<double>(), hi = w.at("end").get<double>();
+        if (std::isfinite(lo) && std::isfinite(hi) && hi > lo) d.window = std::array<double, 2>{lo, hi};
+      }
+    }
+    any = any || !d.empty();
+  }
+  return any ? out : std::vector<ChannelDisplay>{};
+}
 
 Result<GroupAttrs> read_attrs(const ZarrStore& store, const std::string& prefix) {
   GroupAttrs g;
@@ -355,6 +390,7 @@ Result<std::unique_ptr<OmeZarrImage>> OmeZarrImage::open_checked(const std::stri
   } else {
     info.unit = "px";
   }
+  info.channel_display = omero_channel_display(g.attrs, info.channels, img->warnings_);
   for (int a = 0; a < 3; ++a)
     if (info.dims[a] > (uint64_t(1) << 32))
       return unsupported(g.what + ": level 0 is " + std::to_string(info.dims[a]) + " voxels along " + "xyz"[a] +
