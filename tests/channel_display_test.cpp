@@ -61,7 +61,7 @@ uint32_t header_version(const fs::path& vxc) {
 
 }  // namespace
 
-TEST_CASE("channel display: colours parse from the OME int, hex and Imaris spellings; names are cleaned") {
+TEST_CASE("channel display: colours parse from the OME int, hex and Imaris spellings, names are cleaned") {
   CHECK(color_from_ome_int("-2147483648") == kDarkRed);  // RGBA 0x80000000
   CHECK(color_from_ome_int("-1") == Rgb8{255, 255, 255});
   CHECK(color_from_ome_int("65535") == Rgb8{0, 0, 255});  // 0x0000FFFF: blue, alpha 255
@@ -119,7 +119,7 @@ TEST_CASE("channel display: OME-XML Channel Name and Color of every channel") {
   CHECK((*src)->info().channel_display[0].color == Rgb8{0, 255, 0});
 }
 
-TEST_CASE("channel display: import keeps names, colours and windows in a version 2 header; none writes version 1") {
+TEST_CASE("channel display: import keeps names, colours and windows in a version 2 header, none writes version 1") {
   const fs::path dir = scratch_dir("channel_display", "container");
   ChannelDisplay dapi{"DAPI", Rgb8{0, 0, 255}, std::array<double, 2>{10, 200}};
   ChannelDisplay second;  // states nothing
@@ -162,7 +162,7 @@ TEST_CASE("channel display: import keeps names, colours and windows in a version
   CHECK(bad.status().message().find("crafted.vxc: header channel record 0") != std::string::npos);
 }
 
-TEST_CASE("channel display: OME-Zarr omero channels are read in place; a mismatched list is ignored with a note") {
+TEST_CASE("channel display: OME-Zarr omero channels are read in place, a mismatched list is ignored with a note") {
   const fs::path dir = scratch_dir("channel_display", "zarr");
   fs::copy(kData + "/zarr/simple_0.4", dir / "img.zarr", fs::copy_options::recursive);
   auto with_omero = [&](const nlohmann::json& omero) {

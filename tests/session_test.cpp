@@ -186,7 +186,7 @@ TEST_CASE("session: vxr view --channel --settings draws what vxr render draws, a
   CHECK(bad.err.find("nowhere.json") != std::string::npos);
 }
 
-TEST_CASE("view command: option errors are usage failures found before any volume is read; a run reports what it drew") {
+TEST_CASE("view command: option errors are usage failures found before any volume is read, a run reports what it drew") {
   std::vector<std::string> info, notes;
   const xr::ViewReport report{[&](const std::string& line) { info.push_back(line); },
                               [&](const std::string& line) { notes.push_back(line); }};
