@@ -417,3 +417,44 @@ TEST_CASE("cut plane through the OpenXR test runtime: a starting plane (a card's
   check_cut_half(*cut_eye, *whole_eye);
   CHECK_MESSAGE(test::core_validation_messages(dir).empty(), test::core_validation_messages(dir));
 }
+
+TEST_CASE("cut plane in a card: vxr render draws a Scene's plane, --save-card keeps it, --card draws it again") {
+  const fs::path dir = test::scratch_dir("cut_plane", "render_card");
+  const fs::path store = dir / "store";
+  {
+    auto s = annotate::AnnotationStore::open(store.string(), true);
+    REQUIRE(s.is_ok());
+  }
+  const std::string input = q(std::string(VXR_TESTDATA_DIR) + "/tiff/mri-stack-calibrated.tif");
+  // Keeps the voxels with x >= 40.
+  std::ofstream(dir / "scene.json") << R"({"cut": {"normal": [1, 0, 0], "offset": -40}})";
+  test::CliRun r = test::run_vxr("render " + input + " --settings " + q(dir / "scene.json") + " --size 48x48 -o " +
+                                     q(dir / "cut.png") + " --save-card " + q(store),
+                                 dir, 180);
+  INFO("stdout: " << r.out << "\nstderr: " << r.err);
+  REQUIRE(r.rc == 0);
+  r = test::run_vxr("render --card " + q(store.string() + ":1") + " -o " + q(dir / "again.png"), dir, 180);
+  REQUIRE(r.rc == 0);
+  r = test::run_vxr("render " + input + " --size 48x48 -o " + q(dir / "whole.png"), dir, 180);
+  REQUIRE(r.rc == 0);
+  auto cut = read_png((dir / "cut.png").string());
+  auto again = read_png((dir / "again.png").string());
+  auto whole = read_png((dir / "whole.png").string());
+  REQUIRE(cut.is_ok());
+  REQUIRE(again.is_ok());
+  REQUIRE(whole.is_ok());
+  CHECK(again->pixels == cut->pixels);  // the card kept the plane
+  size_t shown_cut = 0, shown_whole = 0;
+  for (uint32_t y = 0; y < 48; ++y)
+    for (uint32_t x = 0; x < 48; ++x) {
+      shown_cut += !background(*cut, x, y);
+      shown_whole += !background(*whole, x, y);
+    }
+  INFO("volume pixels: " << shown_cut << " cut, " << shown_whole << " whole");
+  CHECK(shown_cut > 0);
+  CHECK(shown_cut + 48 * 48 / 20 < shown_whole);  // a good part of the head is gone
+  // The dense renderer does not clip: refused, naming the plane.
+  r = test::run_vxr("render --card " + q(store.string() + ":1") + " --renderer dense -o " + q(dir / "dense.png"), dir, 60);
+  CHECK(r.rc == 2);
+  CHECK(r.err.find("cut plane") != std::string::npos);
+}
