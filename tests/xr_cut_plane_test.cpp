@@ -426,8 +426,8 @@ TEST_CASE("cut plane in a card: vxr render draws a Scene's plane, --save-card ke
     REQUIRE(s.is_ok());
   }
   const std::string input = q(std::string(VXR_TESTDATA_DIR) + "/tiff/mri-stack-calibrated.tif");
-  // Keeps the voxels with x >= 40.
-  std::ofstream(dir / "scene.json") << R"({"cut": {"normal": [1, 0, 0], "offset": -40}})";
+  // Keeps the voxels with x >= 93 (the right half of the 186-wide MRI stack).
+  std::ofstream(dir / "scene.json") << R"({"cut": {"normal": [1, 0, 0], "offset": -93}})";
   test::CliRun r = test::run_vxr("render " + input + " --settings " + q(dir / "scene.json") + " --size 48x48 -o " +
                                      q(dir / "cut.png") + " --save-card " + q(store),
                                  dir, 180);
