@@ -317,9 +317,15 @@ TEST_CASE("cut plane end to end: a headless pose script cuts away the half behin
                                     dir, 180);
   INFO("stdout: " << with.out << "\nstderr: " << with.err);
   REQUIRE(with.rc == 0);
-  char line[160];
-  std::snprintf(line, sizeof line, "cut plane: normal (1.000000, 0.000000, 0.000000), offset %.6f (voxels)", want.offset);
-  CHECK((with.out + with.err).find(line) != std::string::npos);
+  // "cut plane: normal (x, y, z), offset d (voxels)", printed to 6 decimals.
+  const std::string all = with.out + with.err;
+  const size_t at = all.find("cut plane: normal (");
+  REQUIRE(at != std::string::npos);
+  glm::dvec3 n;
+  double offset = 0.0;
+  REQUIRE(std::sscanf(all.c_str() + at, "cut plane: normal (%lf, %lf, %lf), offset %lf", &n.x, &n.y, &n.z, &offset) == 4);
+  CHECK(glm::length(n - want.normal) < 2e-6);
+  CHECK(std::abs(offset - want.offset) < 2e-6);
   test::CliRun without = test::run_vxr("view --sample --headless --script " + q(dir / "whole.json") + " --png-dir " +
                                            q(dir / "without"),
                                        dir, 180);
