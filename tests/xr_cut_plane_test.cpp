@@ -243,7 +243,8 @@ std::string q(const fs::path& p) { return test::shell_quote(p.string()); }
 
 // The head at (0, 1.6, 0) looking along -z at the sample (default transform, centre (0, 1.6, -0.5)),
 // eyes together (ipd 0). The right hand aims along +x with its tip 1 cm right of the centre.
-// The trigger is pressed at frame base + 2 and released at base + 4 when `cut`.
+// The left menu button is pressed at frame base + 1 (the cycle to cut) and the trigger pressed at
+// base + 2 and released at base + 4 when `cut`.
 const glm::dvec3 kCutTip{0.01, 1.6, -0.5};
 
 std::string cut_script(uint64_t base, bool cut, int size, const std::string& extra = "") {
@@ -255,7 +256,8 @@ std::string cut_script(uint64_t base, bool cut, int size, const std::string& ext
   "keys": [
     {"frame": 0, "head": {"position": [0, 1.6, 0], "orientation": [0, 0, 0, 1]},
      "right": {"aim": )" + aim + R"(, "trigger": 0}},
-    {"frame": )" + f(2) + R"(, "right": {"trigger": )" + (cut ? "1" : "0") + R"(}},
+    {"frame": )" + f(1) + R"(, "left": {"menu": true}},
+    {"frame": )" + f(2) + R"(, "left": {"menu": false}, "right": {"trigger": )" + (cut ? "1" : "0") + R"(}},
     {"frame": )" + f(4) + R"(, "right": {"trigger": 0}},
     {"frame": )" + f(6) + R"(}
   ]})";
@@ -311,7 +313,8 @@ TEST_CASE("cut plane end to end: a headless pose script cuts away the half behin
   const CutPlane want = expected_cut(p);
   std::ofstream(dir / "cut.json") << cut_script(0, true, 64);
   std::ofstream(dir / "whole.json") << cut_script(0, false, 64);
-  // No store: the triggers have only the cut plane to work.
+  // No store: the menu turns the cut plane on (the cycle is off -> cut), then the trigger places it.
+  // The run without the plane presses the menu too, not the trigger.
   test::CliRun with = test::run_vxr("view --sample --headless --script " + q(dir / "cut.json") + " --png-dir " +
                                         q(dir / "with"),
                                     dir, 180);
@@ -331,6 +334,7 @@ TEST_CASE("cut plane end to end: a headless pose script cuts away the half behin
                                        dir, 180);
   REQUIRE(without.rc == 0);
   CHECK((without.out + without.err).find("cut plane") == std::string::npos);
+  CHECK((without.out + without.err).find("tool cut") != std::string::npos);
   auto a = read_png((dir / "with" / "last_left.png").string());
   auto b = read_png((dir / "without" / "last_left.png").string());
   REQUIRE(a.is_ok());
@@ -341,12 +345,9 @@ TEST_CASE("cut plane end to end: a headless pose script cuts away the half behin
 TEST_CASE("cut plane through the OpenXR test runtime: menu to cut, trigger held and released, the eye is cut") {
   test::GpuTestScope scope;
   const std::string dir = test::xr_out_dir("cut_plane");
-  // Input is live once the session is FOCUSED: the menu at frame 10 (roi -> cut), the trigger 12..14.
+  // Input is live once the session is FOCUSED: the menu at frame 11 (roi -> cut), the trigger 12..14.
   // Frame 9 shows the whole volume, frame 20 the cut one; UNORM swapchains: the renderer's bytes.
-  std::string script = cut_script(10, true, 48, R"(, "no_srgb": true, "dump_frames": [9, 20])");
-  const std::string menu = R"({"frame": 10, "left": {"menu": true}}, {"frame": 11, "left": {"menu": false}},)";
-  script.insert(script.find(R"({"frame": 12)"), menu);
-  test::use_test_runtime(dir, script);
+  test::use_test_runtime(dir, cut_script(10, true, 48, R"(, "no_srgb": true, "dump_frames": [9, 20])"));
   auto v = assets::sample_volume();
   REQUIRE(v.is_ok());
   const VolumePlacement placement{v->dims, v->voxel_size};

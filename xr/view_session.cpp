@@ -119,6 +119,10 @@ struct Motion {
   Teleport teleport;
   CutPlaneTool cut;
   bool placed = false;  // ViewOptions::place_for_camera applied
+  // Without a store (no HandTools) the menu's cycle is off -> cut: the
+  // triggers do nothing until the menu turns the cut plane on.
+  bool storeless_cut = false;
+  bool menu_down = false;
 };
 
 // "cut plane: normal (x, y, z), offset d (voxels)" or "cut plane: cleared".
@@ -130,17 +134,28 @@ std::string describe_cut(const CutPlane& c) {
   return line;
 }
 
-// The cut tool's frame: it holds the triggers while the cycle is on "cut",
-// or always when there is no store (then the triggers have nothing else to do).
-void update_cut(const FrameState& f, const VolumeTransform& t, const HandTools* hands, const ViewOptions& options,
-                FrameTarget& target, CutPlaneTool& cut) {
-  const bool active = hands == nullptr || hands->cutting();
-  const CutPlaneFrame r = cut.update(f.input, t, active);
-  if (!r.placed && !r.cleared) return;
-  target.haptic_pulse(r.placed ? kRight : kLeft, 0.3, 0.01);
-  const std::string line = describe_cut(cut.plane());
+void report_line(const ViewOptions& options, const std::string& line) {
   if (options.on_tool_report) options.on_tool_report(line);
   else log_info("view: " + line);
+}
+
+// The cut tool's frame: it holds the triggers while the cycle is on "cut"
+// (HandTools' cycle, or without a store the menu's off -> cut).
+void update_cut(const FrameState& f, const VolumeTransform& t, const HandTools* hands, const ViewOptions& options,
+                FrameTarget& target, Motion& motion) {
+  if (!hands) {
+    const bool menu = f.input.hands[kLeft].menu || f.input.hands[kRight].menu;
+    if (menu && !motion.menu_down) {
+      motion.storeless_cut = !motion.storeless_cut;
+      report_line(options, motion.storeless_cut ? "tool cut" : "tool none");
+    }
+    motion.menu_down = menu;
+  }
+  const bool active = hands ? hands->cutting() : motion.storeless_cut;
+  const CutPlaneFrame r = motion.cut.update(f.input, t, active);
+  if (!r.placed && !r.cleared) return;
+  target.haptic_pulse(r.placed ? kRight : kLeft, 0.3, 0.01);
+  report_line(options, describe_cut(motion.cut.plane()));
 }
 
 // One run of a target: returns kRestart when the target lost its session.
@@ -226,7 +241,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
       VXR_RETURN_IF_ERROR(eyes->set_annotations(std::move(scene), /*make_pass=*/true));
       marker_drawn = marker.has_value();
     }
-    update_cut(*frame, stats.transform, hands, options, target, motion.cut);  // after the menu's cycle
+    update_cut(*frame, stats.transform, hands, options, target, motion);  // after the menu's cycle
     fs.lod.cut = motion.cut.plane();
     stats.cut = motion.cut.plane();
     if (frame->settings && !(*frame->settings == drawn_settings)) {
