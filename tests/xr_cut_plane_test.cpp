@@ -315,6 +315,11 @@ TEST_CASE("cut plane end to end: a headless pose script cuts away the half behin
   std::ofstream(dir / "whole.json") << cut_script(0, false, 64);
   // No store: the menu turns the cut plane on (the cycle is off -> cut), then the trigger places it.
   // The run without the plane presses the menu too, not the trigger.
+  // Without a store vxr view reports the plane through log_info: let the children print it.
+  struct InfoLog {
+    InfoLog() { setenv("VXR_LOG", "info", 1); }
+    ~InfoLog() { unsetenv("VXR_LOG"); }
+  } info_log;
   test::CliRun with = test::run_vxr("view --sample --headless --script " + q(dir / "cut.json") + " --png-dir " +
                                         q(dir / "with"),
                                     dir, 180);
