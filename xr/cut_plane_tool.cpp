@@ -21,20 +21,24 @@ bool CutPlaneTool::trigger_held(Hand h, const HandInput& hand) const {
 
 CutPlaneFrame CutPlaneTool::update(const InputState& input, const VolumeTransform& t, bool active) {
   CutPlaneFrame out;
+  std::array<bool, 2> pressed{false, false};
+  for (Hand h : {kLeft, kRight}) {
+    const bool was = held_[h];
+    held_[h] = trigger_held(h, input.hands[h]);
+    pressed[h] = held_[h] && !was;
+  }
   if (!active) {
-    held_ = {false, false};  // a trigger held into the cut tool must be pressed again
+    following_ = false;  // the plane stays where it was
     return out;
   }
   const HandInput& right = input.hands[kRight];
-  const bool was_right = held_[kRight];
-  held_[kRight] = trigger_held(kRight, right);
-  // While held the plane follows the hand; lost tracking freezes it where it was last seen.
-  if (held_[kRight]) plane_ = plane_of_hand(right, t);
-  else if (was_right && right.tracked) out.placed = true;
-
-  const bool was_left = held_[kLeft];
-  held_[kLeft] = trigger_held(kLeft, input.hands[kLeft]);
-  if (held_[kLeft] && !was_left && plane_.enabled && !held_[kRight]) {
+  if (pressed[kRight]) following_ = true;
+  if (following_ && !held_[kRight]) {
+    following_ = false;
+    out.placed = right.tracked;  // lost tracking freezes the plane where it was last seen, no click
+  }
+  if (following_) plane_ = plane_of_hand(right, t);
+  if (pressed[kLeft] && plane_.enabled && !following_) {
     plane_ = CutPlane{};
     out.cleared = true;
   }

@@ -8,7 +8,8 @@
 // the aim direction, so what lies between the hand and the tip plane is cut
 // away and the volume beyond it stays (LodSettings::cut keeps
 // dot(normal, p) + offset >= 0). Releasing leaves the plane where it was.
-// The left trigger clears it.
+// The left trigger clears it (not while the right one holds the plane).
+// A trigger already held when the tool becomes active must be pressed again.
 //
 // The plane is stored in the volume's level-0 voxel coordinates (the frame
 // LodSettings::cut is in), not in the reference space: grabbing, scaling or
@@ -50,7 +51,7 @@ class CutPlaneTool {
   const CutPlane& plane() const { return plane_; }
   // Starts from a saved plane (a card's); the triggers take over from there.
   void set_plane(const CutPlane& plane) { plane_ = plane; }
-  bool following() const { return held_[kRight]; }
+  bool following() const { return following_; }
 
   // The plane through `hand`'s tip, normal along its aim direction, in voxel
   // coordinates of the volume placed at `t` (normal of unit length).
@@ -62,7 +63,8 @@ class CutPlaneTool {
   VolumePlacement placement_;
   CutPlaneSettings s_;
   CutPlane plane_;
-  std::array<bool, 2> held_{false, false};
+  std::array<bool, 2> held_{false, false};  // each trigger, active or not (a press is an edge)
+  bool following_ = false;                   // pressed while active and not yet released
 };
 
 }  // namespace vxr::xr
