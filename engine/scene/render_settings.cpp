@@ -153,6 +153,8 @@ void from_j(const json& j, RenderSettings& s) {
 void read_cut(const json& c, CutPlaneState& cut) {
   if (!c.is_object() || !c.contains("normal") || !c.contains("offset"))
     throw KeyError{"\"cut\" must be an object {normal: [x, y, z], offset} (voxel coordinates)"};
+  const json& n = c.at("normal");
+  if (!n.is_array() || n.size() != 3) throw KeyError{"cut.normal must be [x, y, z] (voxel coordinates)"};
   get(c, "normal", cut.normal);
   get(c, "offset", cut.offset);
   double n2 = 0.0;
