@@ -122,7 +122,7 @@ TEST_CASE("hand tools: the tip maps to voxels through a scaled, turned, moved vo
   CHECK((*markers)[0].cls == "nucleus");
 }
 
-TEST_CASE("hand tools: the menu button cycles count, measure, trace, track, roi, once per press") {
+TEST_CASE("hand tools: the menu button cycles count, measure, trace, track, roi, cut, once per press") {
   auto store = fresh_store(fs::path(VXR_TEST_OUT_DIR) / "hand_tools" / "menu");
   ViewerTools tools(*store);
   HandToolSettings settings;
@@ -131,13 +131,19 @@ TEST_CASE("hand tools: the menu button cycles count, measure, trace, track, roi,
   CHECK(hands.tool() == Tool::kTrace);
   CHECK(tools.palette().tool() == Tool::kTrace);
   InputState in = right_at({0.0, 1.5, -0.5}, 0.0);
-  const Tool expected[] = {Tool::kTrack, Tool::kRoi, Tool::kCount, Tool::kMeasure, Tool::kTrace, Tool::kTrack};
-  for (Tool want : expected) {
+  struct Step {
+    Tool tool;
+    bool cut;  // the cut plane (xr/cut_plane_tool.h) holds the triggers; tool() stays roi
+  };
+  const Step expected[] = {{Tool::kTrack, false}, {Tool::kRoi, false},   {Tool::kRoi, true},   {Tool::kCount, false},
+                           {Tool::kMeasure, false}, {Tool::kTrace, false}, {Tool::kTrack, false}};
+  for (const Step& want : expected) {
     in.hands[kRight].menu = true;
     CHECK(hands.update(in, plain(), 0).tool_changed);
-    CHECK(hands.tool() == want);
+    CHECK(hands.tool() == want.tool);
+    CHECK(hands.cutting() == want.cut);
     CHECK(!hands.update(in, plain(), 0).tool_changed);  // held: no repeat
-    CHECK(hands.tool() == want);
+    CHECK(hands.tool() == want.tool);
     in.hands[kRight].menu = false;
     CHECK(!hands.update(in, plain(), 0).tool_changed);
   }

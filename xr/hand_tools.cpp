@@ -45,16 +45,34 @@ glm::dvec3 HandTools::tip_voxel(const HandInput& hand, const VolumeTransform& t)
   return placement_.world_to_voxel_point(t.to_volume(tip(hand)));
 }
 
+void HandTools::cycle() {
+  if (cutting_) {
+    cutting_ = false;
+    tool_ = Tool::kCount;
+  } else if (tool_ == Tool::kRoi) {
+    cutting_ = true;
+  } else {
+    tool_ = next_tool(tool_);
+  }
+  tools_.select_tool(tool_);  // drops what the old tool was drawing
+  last_move_.reset();
+}
+
 HandToolFrame HandTools::update(const InputState& input, const VolumeTransform& t, uint32_t timepoint) {
   HandToolFrame out;
   const bool menu = input.hands[kLeft].menu || input.hands[kRight].menu;
   if (menu && !menu_down_) {
-    tool_ = next_tool(tool_);
-    tools_.select_tool(tool_);  // drops what the old tool was drawing
-    last_move_.reset();
+    cycle();
     out.tool_changed = true;
   }
   menu_down_ = menu;
+  if (cutting_) {
+    // The cut plane owns the triggers and buttons; a press held into the next tool must be pressed again.
+    held_ = {true, true};
+    primary_down_ = secondary_down_ = true;
+    follow_current_node();
+    return out;
+  }
 
   auto send = [&](Hand h, ToolAction action, const annotate::Vec3& at) {
     const uint64_t before = tools_.revision();
@@ -120,6 +138,7 @@ void HandTools::follow_current_node() {
 
 std::string HandTools::report() const {
   const annotate::ToolLiveState& live = tools_.palette().live();
+  if (cutting_) return "tool cut";
   std::string r = std::string("tool ") + annotate::tool_name(tool_);
   if (tool_ == Tool::kCount || tool_ == Tool::kTrack) {
     const auto it = live.counts.find(s_.count_class);

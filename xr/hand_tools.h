@@ -5,7 +5,9 @@
 // volume transform. Press above `press`, release below `release`
 // (hysteresis, as GrabSettings); while held, moves preview a measurement or
 // box. Either hand's menu button cycles count -> measure -> trace -> track ->
-// roi. The left hand's trigger removes the nearest (ToolAction::kRemove at
+// roi -> cut. "cut" is the cut plane (xr/cut_plane_tool.h): it edits no store,
+// so it is no annotate::Tool; while it is on, the triggers, A and B leave the
+// store alone and the session's CutPlaneTool takes them. The left hand's trigger removes the nearest (ToolAction::kRemove at
 // its tip). The right hand's primary button (A) picks at its tip (trace: the
 // nearest node becomes the one the next node hangs below) and its secondary
 // button (B) finishes (trace: the next node starts a new root; track: the
@@ -51,7 +53,10 @@ class HandTools {
 
   HandToolFrame update(const InputState& input, const VolumeTransform& t, uint32_t timepoint);
 
+  // The annotation tool; while cutting(), the one the cycle left (roi).
   annotate::Tool tool() const { return tool_; }
+  // The cycle is on the cut plane: the triggers belong to the CutPlaneTool.
+  bool cutting() const { return cutting_; }
   bool pressed(Hand hand) const { return held_[hand]; }
   ViewerTools& tools() { return tools_; }
 
@@ -79,6 +84,7 @@ class HandTools {
   VolumePlacement placement_;
   HandToolSettings s_;
   annotate::Tool tool_;
+  bool cutting_ = false;
   std::array<bool, 2> held_{false, false};
   bool menu_down_ = false;
   bool primary_down_ = false, secondary_down_ = false;  // the right hand's, last frame
@@ -87,9 +93,10 @@ class HandTools {
   int64_t shown_node_ = annotate::kNoParent;
   std::optional<annotate::Vec3> shown_node_pos_;
   void follow_current_node();
+  void cycle();  // the menu's next step: the tools in next_tool's order, then cut, then count
 };
 
-// The tool after `tool` in the menu's cycle.
+// The annotation tool after `tool` (roi: count; the menu puts cut between them).
 annotate::Tool next_tool(annotate::Tool tool);
 
 }  // namespace vxr::xr

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <optional>
 
@@ -112,12 +113,50 @@ std::optional<AnnotationSphere> teleport_marker(const Teleport& teleport, const 
   return AnnotationSphere{*teleport.target(), 0.01 / t.scale, glm::vec4(0.3f, 0.6f, 1.0f, 1.0f)};
 }
 
-// What moves the volume before a frame is drawn, kept across restarts.
+// What moves the volume (and the cut plane) before a frame is drawn, kept across restarts.
 struct Motion {
   GrabInteraction grab;
   Teleport teleport;
+  CutPlaneTool cut;
   bool placed = false;  // ViewOptions::place_for_camera applied
+  // Without a store (no HandTools) the menu's cycle is off -> cut: the
+  // triggers do nothing until the menu turns the cut plane on.
+  bool storeless_cut = false;
+  bool menu_down = false;
 };
+
+// "cut plane: normal (x, y, z), offset d (voxels)" or "cut plane: cleared".
+std::string describe_cut(const CutPlane& c) {
+  if (!c.enabled) return "cut plane: cleared";
+  char line[160];
+  std::snprintf(line, sizeof line, "cut plane: normal (%.6f, %.6f, %.6f), offset %.6f (voxels)", c.normal.x,
+                c.normal.y, c.normal.z, c.offset);
+  return line;
+}
+
+void report_line(const ViewOptions& options, const std::string& line) {
+  if (options.on_tool_report) options.on_tool_report(line);
+  else log_info("view: " + line);
+}
+
+// The cut tool's frame: it holds the triggers while the cycle is on "cut"
+// (HandTools' cycle, or without a store the menu's off -> cut).
+void update_cut(const FrameState& f, const VolumeTransform& t, const HandTools* hands, const ViewOptions& options,
+                FrameTarget& target, Motion& motion) {
+  if (!hands) {
+    const bool menu = f.input.hands[kLeft].menu || f.input.hands[kRight].menu;
+    if (menu && !motion.menu_down) {
+      motion.storeless_cut = !motion.storeless_cut;
+      report_line(options, motion.storeless_cut ? "tool cut" : "tool none");
+    }
+    motion.menu_down = menu;
+  }
+  const bool active = hands ? hands->cutting() : motion.storeless_cut;
+  const CutPlaneFrame r = motion.cut.update(f.input, t, active);
+  if (!r.placed && !r.cleared) return;
+  target.haptic_pulse(r.placed ? kRight : kLeft, 0.3, 0.01);
+  report_line(options, describe_cut(motion.cut.plane()));
+}
 
 // One run of a target: returns kRestart when the target lost its session.
 Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkSource>& source,
@@ -202,6 +241,9 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
       VXR_RETURN_IF_ERROR(eyes->set_annotations(std::move(scene), /*make_pass=*/true));
       marker_drawn = marker.has_value();
     }
+    update_cut(*frame, stats.transform, hands, options, target, motion);  // after the menu's cycle
+    fs.lod.cut = motion.cut.plane();
+    stats.cut = motion.cut.plane();
     if (frame->settings && !(*frame->settings == drawn_settings)) {
       // An edit the brick renderer cannot draw keeps the last picture and says why.
       Status ok = check_brick_settings(*frame->settings, eyes->renderer().channels());
@@ -323,7 +365,9 @@ Result<ViewStats> run_view(const TargetFactory& make_target, std::shared_ptr<con
     viewer_tools = std::make_unique<ViewerTools>(*options.tool_store);
     hands = std::make_unique<HandTools>(*viewer_tools, placement, options.hand_tools);
   }
-  Motion motion{GrabInteraction(), Teleport(placement, options.teleport)};
+  Motion motion{GrabInteraction(), Teleport(placement, options.teleport), CutPlaneTool(placement, options.cut)};
+  motion.cut.set_plane(options.frame.lod.cut);
+  stats.cut = options.frame.lod.cut;
   FrameBudget budget;
   budget.target_ms = options.frame_budget_ms;
   budget.bias = options.frame.lod.lod_bias;

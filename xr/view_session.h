@@ -31,6 +31,7 @@
 #include "render/annotation_renderer.h"
 #include "render/lod/brick_renderer.h"
 #include "render/volume_session.h"
+#include "xr/cut_plane_tool.h"
 #include "xr/frame_target.h"
 #include "xr/hand_tools.h"
 #include "xr/interaction.h"
@@ -44,7 +45,10 @@ struct ViewOptions {
   uint64_t frames = 0;  // rendered frames before an orderly exit; 0: until the target ends
   RenderSettings settings = default_view_settings();
   LensWarp warp;
-  BrickFrameSettings frame;     // LOD settings and per-frame upload budget
+  // LOD settings and per-frame upload budget. frame.lod.cut is where the
+  // cut plane starts (a card's, cut_plane_of(Scene::cut)); the hands' cut
+  // tool moves or clears it from there.
+  BrickFrameSettings frame;
   double frame_budget_ms = 0.0;  // > 0: the LOD bias follows the frame time towards this
   uint64_t cache_bytes = uint64_t(1) << 30;  // decoded chunks kept on the CPU
   uint32_t loader_threads = 2;
@@ -66,6 +70,7 @@ struct ViewOptions {
   // draw ViewSpec::camera themselves (headless --card) leave it empty.
   std::optional<Camera> place_for_camera;
   TeleportSettings teleport;
+  CutPlaneSettings cut;
 };
 
 struct ViewStats {
@@ -88,6 +93,7 @@ struct ViewStats {
   uint64_t bricks_uploaded = 0;
   VolumeTransform transform;   // where the interaction left the volume
   uint64_t teleports = 0;      // jumps the teleport made
+  CutPlane cut;                // where the cut tool left the plane (voxel coordinates; disabled: none)
 };
 
 // p50/p99 frame ms, frames complete, pipelines after frame 1, readbacks per

@@ -26,8 +26,9 @@ Result<std::vector<uint8_t>> reference_pixels(const VolumeSession& session, cons
     level0.push_back(std::move(dense));
   }
   const auto t0 = std::chrono::steady_clock::now();
-  VXR_ASSIGN_OR_RETURN(ImageRgbaF ref,
-                       render_reference(level0, camera, session.settings, o.width, o.height, {o.reference_step, 0}));
+  ReferenceOptions ro{o.reference_step, 0};
+  if (o.cut.enabled) ro.plane = glm::dvec4(o.cut.normal, o.cut.offset);  // clipped as the bricks are
+  VXR_ASSIGN_OR_RETURN(ImageRgbaF ref, render_reference(level0, camera, session.settings, o.width, o.height, ro));
   *cpu_ms = ms_since(t0);
   return over_black(to_rgba8(ref)).pixels;
 }
@@ -64,6 +65,7 @@ Result<StillResult> render_still(gpu::Context& gpu, const VolumeSession& session
   frame.lod.lod_bias = o.lod_bias;
   frame.lod.timepoint = session.timepoint;
   frame.lod.skip_empty = o.skip_empty;
+  frame.lod.cut = o.cut;
   const bool budget = o.frame_budget_ms > 0.0;
   FrameBudget controller;
   controller.target_ms = o.frame_budget_ms;

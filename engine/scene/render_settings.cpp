@@ -149,6 +149,21 @@ void from_j(const json& j, RenderSettings& s) {
   get(j, "max_steps", s.max_steps);
 }
 
+// "cut": {"normal": [x, y, z], "offset": d}; present means enabled.
+void read_cut(const json& c, CutPlaneState& cut) {
+  if (!c.is_object() || !c.contains("normal") || !c.contains("offset"))
+    throw KeyError{"\"cut\" must be an object {normal: [x, y, z], offset} (voxel coordinates)"};
+  const json& n = c.at("normal");
+  if (!n.is_array() || n.size() != 3) throw KeyError{"cut.normal must be [x, y, z] (voxel coordinates)"};
+  get(c, "normal", cut.normal);
+  get(c, "offset", cut.offset);
+  double n2 = 0.0;
+  for (double v : cut.normal) n2 += v * v;
+  if (!(std::isfinite(n2) && n2 > 0.0 && std::isfinite(cut.offset)))
+    throw KeyError{"cut.normal must be a finite non-zero vector and cut.offset a finite number"};
+  cut.enabled = true;
+}
+
 template <typename T, typename F>
 Result<T> parse(const std::string& text, F&& fill) {
   json j = json::parse(text, nullptr, false);
@@ -208,6 +223,7 @@ std::string scene_to_json(const Scene& s) {
   if (s.has_camera)
     j["camera"] = {{"eye", s.camera.eye}, {"target", s.camera.target}, {"up", s.camera.up}, {"fov_y_deg", s.camera.fov_y_deg}};
   if (s.voxel_size != std::array<double, 3>{0, 0, 0}) j["voxel_size"] = s.voxel_size;  // older readers ignore it
+  if (s.cut.enabled) j["cut"] = {{"normal", s.cut.normal}, {"offset", s.cut.offset}};  // older readers ignore it
   return j.dump(2);
 }
 
@@ -252,6 +268,7 @@ Result<Scene> scene_from_json(const std::string& text) {
       for (double v : s.voxel_size)
         if (!(v > 0.0 && std::isfinite(v)))
           throw KeyError{"voxel_size must be three positive finite numbers (world units per voxel), or absent"};
+    if (j.contains("cut")) read_cut(j.at("cut"), s.cut);
     if (j.contains("camera")) {
       const json& c = j.at("camera");
       s.has_camera = true;

@@ -113,6 +113,17 @@ struct VolumeTransform {
   bool operator==(const VolumeTransform&) const = default;
 };
 
+// A plane clipping the volume (the headset's cut tool; the renderer's
+// LodSettings::cut): points p in level-0 voxel coordinates with
+// dot(normal, p) + offset >= 0 are drawn, the rest is cut away. Voxel
+// coordinates, so the plane moves with the volume's transform.
+struct CutPlaneState {
+  bool enabled = false;
+  std::array<double, 3> normal{0, 0, 1};  // not necessarily of unit length
+  double offset = 0.0;
+  bool operator==(const CutPlaneState&) const = default;
+};
+
 // What a card stores: everything `vxr render --card` needs to draw the same
 // picture again. Fields left at their defaults mean "the viewer's choice".
 struct Scene {
@@ -130,6 +141,7 @@ struct Scene {
   RenderSettings render;
   // World units per voxel replacing the input's own (--voxel-size); all 0: the input's.
   std::array<double, 3> voxel_size{0, 0, 0};
+  CutPlaneState cut;  // JSON "cut": {"normal", "offset"} when enabled; absent (older files): no cut
   bool operator==(const Scene&) const = default;
 };
 
