@@ -10,6 +10,7 @@
 #include "annotate/annotation_store.h"
 #include "core/output_file.h"
 #include "render/card_scene.h"
+#include "render/lod/lod_traversal.h"
 #include "annotate/tools.h"
 #include "xr/desktop/ui_script.h"
 #include "xr/desktop/viewer_setup.h"
@@ -289,6 +290,9 @@ Status ViewCommand::hand_tools(ViewOptions& vo) {
   const bool viewer_has_store = choice_->kind == TargetKind::kDesktop && req_.viewer && req_.viewer->store;
   if (viewer_has_store && o_.tool_given)
     report_.note("note: --tool/--class set the controllers' tools; the window's tools panel picks its own");
+  // The hands' report lines (the cut plane's too, which needs no store).
+  const ViewReport& report = report_;
+  vo.on_tool_report = [&report](const std::string& line) { report.info(line); };
   if (session_->annotation_store.empty() || viewer_has_store) return Status::ok();
   vo.tool_store = req_.viewer ? req_.viewer->store : nullptr;
   if (!vo.tool_store) {
@@ -298,8 +302,6 @@ Status ViewCommand::hand_tools(ViewOptions& vo) {
   }
   vo.hand_tools.tool = *annotate::tool_from_name(o_.tool);  // checked by the flag
   vo.hand_tools.count_class = o_.tool_class;
-  const ViewReport& report = report_;
-  vo.on_tool_report = [&report](const std::string& line) { report.info(line); };
   return Status::ok();
 }
 
@@ -350,6 +352,8 @@ Status ViewCommand::run() {
   // A headset keeps its own head pose and fov: the volume is placed so the head
   // sees what the card's (or a --settings Scene's) camera saw; headless draws the camera itself.
   if (pose_ && choice_->kind == TargetKind::kOpenXr) vo.place_for_camera = req_.headless.camera;
+  // A card's (or a --settings Scene's) cut plane is where the view's plane starts.
+  if (const auto& start = o_.flags.start; start && start->is_scene) vo.frame.lod.cut = cut_plane_of(start->scene.cut);
   VXR_RETURN_IF_ERROR(hand_tools(vo));
   auto stats = run_view(choice_->factory, session_->source, vo, start_);
   if (!stats) return work(stats.status());
