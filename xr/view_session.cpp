@@ -212,6 +212,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
         log_warn("view: settings not applied: " + ok.message());
     }
     const RenderSettings& settings = drawn_settings;
+    apply_clip(settings.clip, source->info().dims, fs.lod);  // the settings' cut plane and box (panels, cards)
     size_t views_drawn = 0;
     uint64_t missing = 0;
     if (frame->should_render) {

@@ -64,6 +64,7 @@ Result<StillResult> render_still(gpu::Context& gpu, const VolumeSession& session
   frame.lod.lod_bias = o.lod_bias;
   frame.lod.timepoint = session.timepoint;
   frame.lod.skip_empty = o.skip_empty;
+  apply_clip(s.clip, session.source->info().dims, frame.lod);
   const bool budget = o.frame_budget_ms > 0.0;
   FrameBudget controller;
   controller.target_ms = o.frame_budget_ms;

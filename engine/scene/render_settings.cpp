@@ -22,6 +22,13 @@ const char* depth_name(DepthColorMode m) {
   return "off";
 }
 
+json clip_j(const ClipSettings& c) {
+  json j = json::object();
+  if (c.cut) j["cut"] = {{"normal", c.cut_normal}, {"offset", c.cut_offset}};
+  if (c.roi) j["roi"] = {{"lo", c.roi_lo}, {"hi", c.roi_hi}};
+  return j;
+}
+
 json to_j(const RenderSettings& s) {
   json channels = json::array();
   for (const auto& c : s.channels) {
@@ -35,7 +42,7 @@ json to_j(const RenderSettings& s) {
                         {"color_points", cp},
                         {"opacity_points", op}});
   }
-  return {{"model", optical_model_name(s.model)},
+  json out = {{"model", optical_model_name(s.model)},
           {"channels", channels},
           {"blend", blend_name(s.blend)},
           {"step_voxels", s.step_voxels},
@@ -56,6 +63,9 @@ json to_j(const RenderSettings& s) {
           {"gradient_opacity",
            {{"enabled", s.gradient_opacity.enabled}, {"lo", s.gradient_opacity.lo}, {"hi", s.gradient_opacity.hi}}},
           {"max_steps", s.max_steps}};
+  // Only when clipping is on: files and cards written before clipping existed stay byte for byte the same.
+  if (s.clip.cut || s.clip.roi) out["clip"] = clip_j(s.clip);
+  return out;
 }
 
 // Reads j[key] into out when present; a wrong type throws json::type_error,
@@ -147,6 +157,20 @@ void from_j(const json& j, RenderSettings& s) {
     get(g, "hi", s.gradient_opacity.hi);
   }
   get(j, "max_steps", s.max_steps);
+  if (j.contains("clip")) {
+    const json& c = j.at("clip");
+    if (!c.is_object()) throw KeyError{"\"clip\" must be an object"};
+    if (c.contains("cut")) {
+      s.clip.cut = true;
+      get(c.at("cut"), "normal", s.clip.cut_normal);
+      get(c.at("cut"), "offset", s.clip.cut_offset);
+    }
+    if (c.contains("roi")) {
+      s.clip.roi = true;
+      get(c.at("roi"), "lo", s.clip.roi_lo);
+      get(c.at("roi"), "hi", s.clip.roi_hi);
+    }
+  }
 }
 
 template <typename T, typename F>

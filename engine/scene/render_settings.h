@@ -61,6 +61,20 @@ struct GradientOpacity {  // opacity *= ramp(|grad|) with |grad| in window units
   bool operator==(const GradientOpacity&) const = default;
 };
 
+// Clipping in volume fractions (0..1 along each axis of the whole volume, so
+// the same numbers mean the same cut at any size or pyramid level): a plane
+// keeping the points f with dot(cut_normal, f) + cut_offset >= 0, and a box
+// keeping [roi_lo, roi_hi]. The out-of-core renderer's LodSettings cut/roi
+// take them in level-0 voxels (render/lod/lod_traversal.h clip_for_volume).
+struct ClipSettings {
+  bool cut = false;
+  std::array<double, 3> cut_normal{0, 0, 1};
+  double cut_offset = 0.0;
+  bool roi = false;
+  std::array<double, 3> roi_lo{0, 0, 0}, roi_hi{1, 1, 1};
+  bool operator==(const ClipSettings&) const = default;
+};
+
 struct RenderSettings {
   OpticalModel model = OpticalModel::kEmissionAbsorption;
   std::vector<ChannelSettings> channels{ChannelSettings{}};  // one per volume channel (up to 4)
@@ -90,6 +104,7 @@ struct RenderSettings {
   DepthColorMode depth_color = DepthColorMode::kOff;  // colour by depth through each channel's colour map
   GradientOpacity gradient_opacity;
   uint32_t max_steps = 1u << 16;
+  ClipSettings clip;  // JSON "clip" (written only when a plane or box is on)
   bool operator==(const RenderSettings&) const = default;
 };
 

@@ -136,6 +136,7 @@ DesktopTarget::DesktopTarget(const DesktopOptions& o) : o_(o) {
       const Status s = state_->restore(state_->render(), state_->scene().timepoint, *o_.viewer->start_orbit);
       if (!s) log_warn("viewer: the card's camera: " + s.message());
     }
+    if (o_.viewer->restore_view) restore_remembered_view();
     if (o_.viewer->script)
       script_ = std::make_unique<UiScriptRunner>(*o_.viewer->script, tools_.get(),
                                                  [this](const ViewerState&) { return card_scene(); });
@@ -341,7 +342,33 @@ Status DesktopTarget::recreate_swapchain() {
   return Status::ok();
 }
 
+void DesktopTarget::restore_remembered_view() {
+  const std::string& path = o_.viewer->view_memory;
+  if (path.empty()) return;
+  auto remembered = load_remembered_view(path);
+  if (!remembered) {
+    log_warn("viewer: " + remembered.status().message() + ": ignored");
+    return;
+  }
+  if (!*remembered) return;  // the first time this dataset opens
+  const Scene& scene = **remembered;
+  if (scene.volume != o_.viewer->scene.volume || scene.channels != o_.viewer->scene.channels) {
+    log_warn("viewer: " + path + ": remembers another input or other channels (" + scene.volume + "): ignored");
+    return;
+  }
+  const OrbitCamera orbit = scene_orbit(scene, o_.viewer->placement).value_or(state_->orbit());
+  if (Status s = state_->restore(scene.render, scene.timepoint, orbit); !s)
+    log_warn("viewer: " + path + ": " + s.message() + ": ignored");
+}
+
+void DesktopTarget::remember_view() {
+  if (!state_ || o_.viewer->view_memory.empty()) return;
+  if (Status s = save_remembered_view(o_.viewer->view_memory, card_scene()); !s)
+    log_warn("viewer: view not remembered: " + s.message());
+}
+
 void DesktopTarget::detach() {
+  if (ctx_) remember_view();  // once per session the window drew, before its size is forgotten
   if (state_ && user_resized_) {
     // The next viewer opens at the size the user left this one.
     const std::string config = viewer_config_path();
@@ -679,6 +706,10 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
                  return std::all_of(prefetch_.begin(), prefetch_.end(),
                                     [t](const TimepointPrefetcher& p) { return p.ready(t); });
                });
+  // Held W/S/A/D/Q/E fly over this frame's time (not while a panel's text field has the keyboard).
+  if (!ImGuiLayer::wants_keyboard())
+    state_->fly_for(held_fly_keys([this](int key) { return glfwGetKey(window_, key) == GLFW_PRESS; }),
+                    frame_ms_ / 1000.0);
   bool script_card = false;  // the script pressed the tools panel's buttons
   std::optional<uint64_t> script_restore;
   if (script_ && !export_) {  // a movie being exported holds the script until it is written
