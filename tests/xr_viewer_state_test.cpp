@@ -609,3 +609,72 @@ TEST_CASE("viewer state: the remembered view is keyed by the input, kept inside 
   CHECK(bad.code() == ErrorCode::kInvalidArgument);
   CHECK(bad.message().rfind(a + ": not a remembered view", 0) == 0);
 }
+
+TEST_CASE("viewer state: the view counts as moving for two ticks and 0.2 s after the user moved it, then still") {
+  ViewerState v = two_channels();
+  v.tick(10.0);
+  CHECK_FALSE(v.moving());  // nothing moved yet
+  v.orbit_drag(5, 0);
+  CHECK_FALSE(v.moving());  // commands and scripts draw at full detail: only the window's input counts
+  v.note_motion();
+  CHECK(v.moving());
+  v.tick(10.5);
+  CHECK(v.moving());  // one tick: the frame after the motion is still coarse, however slow
+  v.tick(11.0);
+  CHECK_FALSE(v.moving());  // two ticks and 1 s later: full detail
+  v.note_motion();
+  v.tick(11.01);
+  v.tick(11.02);
+  v.tick(11.03);
+  CHECK(v.moving());  // fast frames: still moving until 0.2 s have passed
+  v.tick(11.25);
+  CHECK_FALSE(v.moving());
+}
+
+TEST_CASE("opacity editor: a click adds a point under the cursor, a drag moves it, a right click removes it") {
+  ImGuiContext* ctx = ImGui::CreateContext();
+  ImGuiIO& io = ImGui::GetIO();
+  io.IniFilename = nullptr;
+  ViewerState v = two_channels();
+  ImVec2 p0{0, 0};
+  float width = 0;
+  constexpr float kHeight = 72.0f;  // the editor's canvas
+  auto frame = [&](float x, float opacity, bool left, bool right) {
+    io.DisplaySize = ImVec2(800, 600);
+    io.DeltaTime = 1.0f / 60;
+    unsigned char* pixels = nullptr;
+    int w = 0, h = 0;
+    io.Fonts->GetTexDataAsRGBA32(&pixels, &w, &h);
+    io.MousePos = ImVec2(p0.x + x * width, p0.y + (1.0f - opacity) * kHeight);
+    io.MouseDown[ImGuiMouseButton_Left] = left;
+    io.MouseDown[ImGuiMouseButton_Right] = right;
+    ImGui::NewFrame();
+    ImGui::SetNextWindowPos(ImVec2(0, 0));
+    ImGui::SetNextWindowSize(ImVec2(400, 300));
+    ImGui::Begin("editor", nullptr, ImGuiWindowFlags_NoDecoration);
+    p0 = ImGui::GetCursorScreenPos();
+    width = std::max(64.0f, ImGui::GetContentRegionAvail().x);
+    draw_opacity_editor(v, 1, nullptr);
+    ImGui::End();
+    ImGui::Render();
+  };
+  frame(0.5f, 0.8f, false, false);  // lays the window out: the canvas's place is known from here on
+  frame(0.5f, 0.8f, false, false);
+  CHECK(v.render().channels[1].opacity_points.empty());  // hovering edits nothing
+  frame(0.5f, 0.8f, true, false);                        // press away from the two points: a new one
+  auto points = v.render().channels[1].opacity_points;
+  REQUIRE(points.size() == 3);
+  CHECK(points[1].x == doctest::Approx(0.5).epsilon(0.01));
+  CHECK(points[1].opacity == doctest::Approx(0.8).epsilon(0.02));
+  frame(0.25f, 0.4f, true, false);  // held and moved: the new point follows
+  frame(0.25f, 0.4f, false, false);
+  points = v.render().channels[1].opacity_points;
+  REQUIRE(points.size() == 3);
+  CHECK(points[1].x == doctest::Approx(0.25).epsilon(0.02));
+  CHECK(points[1].opacity == doctest::Approx(0.4).epsilon(0.02));
+  CHECK(v.render().channels[0].opacity_points.empty());  // another channel's curve
+  frame(0.25f, 0.4f, false, true);  // right click on it: gone
+  frame(0.25f, 0.4f, false, false);
+  CHECK(v.render().channels[1].opacity_points == std::vector<OpacityPoint>{{0, 0}, {1, 1}});
+  ImGui::DestroyContext(ctx);
+}

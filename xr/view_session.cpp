@@ -193,6 +193,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
 
     BrickFrameSettings fs = options.frame;
     if (options.frame_budget_ms > 0.0) fs.lod.lod_bias = budget.bias;
+    fs.lod.lod_bias += frame->lod_bias_offset;
     if (frame->settings) fs.lod.timepoint = std::min(frame->timepoint, source->info().timepoints - 1);
     if (tools) {
       VXR_RETURN_IF_ERROR(tools->frame(*frame, stats.transform, fs.lod.timepoint, target, *eyes, marker));

@@ -62,6 +62,9 @@ Status init_glfw() {
 DesktopTarget* self(GLFWwindow* w) { return static_cast<DesktopTarget*>(glfwGetWindowUserPointer(w)); }
 
 double g_last_x = 0, g_last_y = 0;
+// While the view moves, voxels twice as large per pixel: about an eighth of the samples, so the picture
+// follows the mouse on large data; the first still frame is drawn at full detail again.
+constexpr double kMovingLodBias = 1.0;
 constexpr uint32_t kPrefetchAhead = 4;  // timepoints decoded ahead of the shown one (MoviePlayerOptions::prefetch)
 
 }  // namespace
@@ -156,11 +159,14 @@ void DesktopTarget::on_viewer_cursor(double dx, double dy) {
     if (const auto v = voxel_under(x, y))
       if (Status s = tools_->measure_hover(*v, state_->scene().timepoint); !s) panel_->message = s.message();
   }
-  if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS)
+  if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
     state_->orbit_drag(dx, dy);
-  else if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
-           glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS)
+    state_->note_motion();
+  } else if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
+             glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS) {
     state_->pan_drag(dx, dy, double(o_.height));
+    state_->note_motion();
+  }
 }
 
 DesktopTarget::~DesktopTarget() {
@@ -192,7 +198,10 @@ void DesktopTarget::on_drag(double dx, double dy) {
 
 void DesktopTarget::on_scroll(double dy) {
   if (state_) {
-    if (!ImGuiLayer::wants_mouse()) state_->zoom(dy);
+    if (!ImGuiLayer::wants_mouse()) {
+      state_->zoom(dy);
+      state_->note_motion();
+    }
     return;
   }
   distance_ = std::clamp(distance_ * std::pow(0.9, dy), 0.02, 50.0);
@@ -707,9 +716,11 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
                                     [t](const TimepointPrefetcher& p) { return p.ready(t); });
                });
   // Held W/S/A/D/Q/E fly over this frame's time (not while a panel's text field has the keyboard).
-  if (!ImGuiLayer::wants_keyboard())
-    state_->fly_for(held_fly_keys([this](int key) { return glfwGetKey(window_, key) == GLFW_PRESS; }),
-                    frame_ms_ / 1000.0);
+  const FlyInput held = held_fly_keys([this](int key) { return glfwGetKey(window_, key) == GLFW_PRESS; });
+  if (held.any() && !ImGuiLayer::wants_keyboard()) {
+    state_->fly_for(held, frame_ms_ / 1000.0);
+    state_->note_motion();
+  }
   bool script_card = false;  // the script pressed the tools panel's buttons
   std::optional<uint64_t> script_restore;
   if (script_ && !export_) {  // a movie being exported holds the script until it is written
@@ -792,6 +803,8 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   }
   f.settings = drawn_settings_;
   f.timepoint = state_->scene().timepoint;
+  // Coarse while the user moves the view, full detail once it is still (progressive refinement).
+  f.lod_bias_offset = state_->moving() ? kMovingLodBias : 0.0;
   drawn_timepoint_ = f.timepoint;
   f.should_render = true;
   f.display_time_ns = int64_t(frame_) * 16666667;

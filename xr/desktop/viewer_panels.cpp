@@ -31,10 +31,9 @@ void histogram_bars(ImDrawList* draw, ImVec2 p0, ImVec2 size, const std::vector<
   }
 }
 
-// The opacity curve over the window drawn over the histogram: drag a point to
-// move it, click elsewhere to add one, right-click a point to remove it.
-// The canvas spans the window (x 0..1 = window lo..hi), opacity 0..1 bottom to top.
-void opacity_editor(ViewerState& state, size_t c, const std::vector<float>* histogram) {
+}  // namespace
+
+void draw_opacity_editor(ViewerState& state, size_t c, const std::vector<float>* histogram) {
   const ImVec2 p0 = ImGui::GetCursorScreenPos();
   const ImVec2 size(std::max(64.0f, ImGui::GetContentRegionAvail().x), 72.0f);
   ImGui::InvisibleButton("##opacity", size, ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight);
@@ -78,6 +77,8 @@ void opacity_editor(ViewerState& state, size_t c, const std::vector<float>* hist
   ImGui::TextDisabled("opacity: drag, click adds, right click removes");
 }
 
+namespace {
+
 void channel_panel(ViewerState& state, const PanelInputs& in) {
   const std::vector<std::string> maps = colormap_names();
   const auto range = state.data_range();
@@ -102,7 +103,7 @@ void channel_panel(ViewerState& state, const PanelInputs& in) {
     float gamma = static_cast<float>(ch.gamma);
     if (ImGui::SliderFloat("gamma", &gamma, 0.1f, 5.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
       (void)state.set_gamma(c, gamma);
-    opacity_editor(state, c, c < in.histograms.size() ? &in.histograms[c] : nullptr);
+    draw_opacity_editor(state, c, c < in.histograms.size() ? &in.histograms[c] : nullptr);
     ImGui::PopID();
     ImGui::Separator();
   }

@@ -387,8 +387,19 @@ Status ViewerState::set_timepoint(uint32_t t) {
   return Status::ok();
 }
 
+void ViewerState::note_motion() {
+  moved_ = true;
+  motion_tick_ = ticks_;
+  motion_s_ = now_s_;
+}
+
+bool ViewerState::moving() const {
+  return moved_ && (ticks_ - motion_tick_ < kStillFrames || now_s_ - motion_s_ < kStillSeconds);
+}
+
 void ViewerState::tick(double now_s, const std::function<bool(uint32_t)>& ready) {
   now_s_ = now_s;
+  ++ticks_;
   if (!clock_.playing()) return;
   const PlaybackFrame f = clock_.tick(now_s, ready);
   if (f.timepoint != scene_.timepoint) {

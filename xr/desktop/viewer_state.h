@@ -133,6 +133,16 @@ class ViewerState {
   Status axis_view(int axis);
   CameraState camera() const { return orbit_.camera(); }
 
+  // Progressive refinement: the window calls note_motion() when the user
+  // moves the view (drag, wheel, fly keys); while moving() the window draws
+  // at a coarser level of detail, and at full detail once the view has been
+  // still for kStillFrames ticks and kStillSeconds. Script commands do not
+  // count: a scripted picture is always at full detail.
+  static constexpr uint64_t kStillFrames = 2;
+  static constexpr double kStillSeconds = 0.2;
+  void note_motion();
+  bool moving() const;
+
   // Back to what a card saved: its settings (same channel count), timepoint
   // and the orbit that shows its camera. Nothing changes when it is refused.
   Status restore(const RenderSettings& render, uint32_t timepoint, const OrbitCamera& orbit);
@@ -168,6 +178,10 @@ class ViewerState {
   bool quit_requested_ = false;
   PlaybackClock clock_;
   double now_s_ = 0.0;  // the latest tick
+  uint64_t ticks_ = 0;
+  bool moved_ = false;  // note_motion() was called at least once
+  uint64_t motion_tick_ = 0;
+  double motion_s_ = 0.0;
 };
 
 // The window size the viewer remembers between runs: a small JSON under
