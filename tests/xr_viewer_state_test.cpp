@@ -678,3 +678,46 @@ TEST_CASE("opacity editor: a click adds a point under the cursor, a drag moves i
   CHECK(v.render().channels[1].opacity_points == std::vector<OpacityPoint>{{0, 0}, {1, 1}});
   ImGui::DestroyContext(ctx);
 }
+
+TEST_CASE("clip controls: clicking the cut plane box turns the plane on and off, drawing alone changes nothing") {
+  ImGuiContext* ctx = ImGui::CreateContext();
+  ImGuiIO& io = ImGui::GetIO();
+  io.IniFilename = nullptr;
+  ViewerState v = two_channels();
+  REQUIRE(v.apply_command("cut -y 0.3").is_ok());
+  REQUIRE(v.apply_command("cut off").is_ok());
+  ImVec2 p0{0, 0};
+  auto frame = [&](bool left) {
+    io.DisplaySize = ImVec2(800, 600);
+    io.DeltaTime = 1.0f / 60;
+    unsigned char* pixels = nullptr;
+    int w = 0, h = 0;
+    io.Fonts->GetTexDataAsRGBA32(&pixels, &w, &h);
+    io.MousePos = ImVec2(p0.x + 6, p0.y + 6);  // inside the first widget's box: the "cut plane" checkbox
+    io.MouseDown[ImGuiMouseButton_Left] = left;
+    ImGui::NewFrame();
+    ImGui::SetNextWindowPos(ImVec2(0, 0));
+    ImGui::SetNextWindowSize(ImVec2(400, 400));
+    ImGui::Begin("clip", nullptr, ImGuiWindowFlags_NoDecoration);
+    p0 = ImGui::GetCursorScreenPos();
+    draw_clip_controls(v);
+    ImGui::End();
+    ImGui::Render();
+  };
+  const uint64_t r0 = v.revision();
+  frame(false);
+  frame(false);
+  CHECK(v.revision() == r0);
+  frame(true);
+  frame(false);  // a click: press, release
+  CHECK(v.render().clip.cut);
+  CHECK(v.render().clip.cut_normal == std::array<double, 3>{0, -1, 0});  // the plane it had
+  CHECK(v.render().clip.cut_offset == 0.3);
+  frame(true);
+  frame(false);
+  CHECK_FALSE(v.render().clip.cut);
+  REQUIRE(v.apply_command("cut 1 1 1 -0.9").is_ok());  // oblique: normal and offset controls instead
+  frame(false);
+  CHECK(v.render().clip.cut);
+  ImGui::DestroyContext(ctx);
+}

@@ -116,10 +116,9 @@ int cut_axis_choice(const ClipSettings& c) {
   return -1;
 }
 
-// Cut plane (on/off, the side kept along an axis and where, or an oblique normal and offset) and
-// the clip box (lo..hi per axis), in fractions of the volume. Editing a control turns it on.
-void clip_panel(ViewerState& state) {
-  if (!ImGui::CollapsingHeader("clipping")) return;  // closed at first: the panel stays short
+}  // namespace
+
+void draw_clip_controls(ViewerState& state) {
   const ClipSettings& c = state.render().clip;
   bool cut = c.cut;
   if (ImGui::Checkbox("cut plane", &cut)) state.set_cut_enabled(cut);
@@ -151,6 +150,12 @@ void clip_panel(ViewerState& state) {
       (void)state.set_roi(new_lo, new_hi);  // refused (lo >= hi): the box stays
     }
   }
+}
+
+namespace {
+
+void clip_panel(ViewerState& state) {
+  if (ImGui::CollapsingHeader("clipping")) draw_clip_controls(state);  // closed at first: the panel stays short
 }
 
 void render_panel(ViewerState& state) {
