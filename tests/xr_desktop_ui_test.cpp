@@ -457,6 +457,32 @@ TEST_CASE("desktop viewer: the opacity curve, the cut plane, the clip box and fl
 
 // One window on the sample with a remembered view (ViewerSetup::view_memory, restore_view), run by
 // the next case in a child of this test binary under xvfb-run (the test process has no display).
+TEST_CASE("vxr render: a --settings file's clip cuts the picture as the window's does") {
+  const std::string dir = test::xr_out_dir("render_clip");
+  auto render = [&](const std::string& name, const std::string& clip_json) {
+    // Every run through a settings file: one without "clip" is the reference (a file's defaults, not the flags').
+    const std::string settings = dir + "/" + name + ".json";
+    std::ofstream(settings) << (clip_json.empty() ? std::string("{}") : "{\"clip\": " + clip_json + "}");
+    const test::ChildResult r = test::run_child(std::string(VXR_BINARY) + " render " + kMri + " -o " + dir + "/" +
+                                                name + ".png --size 160x120 --settings " + settings);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    auto png = read_png(dir + "/" + name + ".png");
+    REQUIRE(png.is_ok());
+    return std::move(png).value();
+  };
+  const ImageRgba8 plain = render("plain", "");
+  const ImageRgba8 whole = render("whole", R"({"roi": {"lo": [0, 0, 0], "hi": [1, 1, 1]}})");
+  const ImageRgba8 half = render("half", R"({"cut": {"normal": [1, 0, 0], "offset": -0.5}})");
+  const ImageRgba8 none = render("none", R"({"cut": {"normal": [1, 0, 0], "offset": -1.5}})");
+  const size_t lit = tint(plain, 0, plain.height).pixels, lit_half = tint(half, 0, half.height).pixels;
+  MESSAGE("lit pixels: whole volume " << lit << ", x >= half kept " << lit_half);
+  CHECK(differing(plain, whole, 0, 0, plain.width, plain.height) == 0);  // a box around everything clips nothing
+  CHECK(lit_half < lit * 3 / 4);
+  CHECK(lit_half > lit / 4);
+  CHECK(tint(none, 0, none.height, 0).pixels == 0);  // the plane keeps x >= 1.5 of the volume: nothing
+}
+
 TEST_CASE("desktop viewer memory: one window run (the Xvfb half of the next case)" * doctest::skip()) {
   const char* memory = std::getenv("VXR_VIEW_MEMORY");
   const char* script = std::getenv("VXR_VIEW_MEMORY_SCRIPT");
