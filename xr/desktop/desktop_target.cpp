@@ -62,8 +62,9 @@ Status init_glfw() {
 DesktopTarget* self(GLFWwindow* w) { return static_cast<DesktopTarget*>(glfwGetWindowUserPointer(w)); }
 
 double g_last_x = 0, g_last_y = 0;
-// While the view moves, voxels twice as large per pixel: about an eighth of the samples, so the picture
-// follows the mouse on large data; the first still frame is drawn at full detail again.
+// While the view moves, voxels twice as large per pixel (one pyramid level coarser: an eighth of the bricks
+// to stream, half the samples along each ray), so the picture follows the mouse on large data; the first
+// still frame is drawn at full detail again.
 constexpr double kMovingLodBias = 1.0;
 constexpr uint32_t kPrefetchAhead = 4;  // timepoints decoded ahead of the shown one (MoviePlayerOptions::prefetch)
 
