@@ -31,6 +31,7 @@ TEST_CASE("settings: every field survives a JSON round trip") {
   s.depth_color = DepthColorMode::kAxisY;
   s.gradient_opacity = {true, 0.01, 0.2};
   s.max_steps = 1234;
+  s.clip = {true, {0.6, 0.8, 0.0}, -0.3125, true, {0.1, 0.2, 0.0}, {0.9, 0.75, 1.0}};
   auto back = render_settings_from_json(render_settings_to_json(s));
   REQUIRE(back.is_ok());
   CHECK(*back == s);
@@ -60,6 +61,10 @@ TEST_CASE("settings: missing keys keep defaults, bad ones are named") {
   CHECK(type.status().code() == ErrorCode::kInvalidArgument);
   auto window = render_settings_from_json(R"({"channels": [{"window": [1, 2, 3]}]})");
   CHECK(window.status().message().find("window") != std::string::npos);
+  auto clip = render_settings_from_json(R"({"clip": 3})");
+  CHECK(clip.status().message().find("\"clip\" must be an object") != std::string::npos);
+  auto cut = render_settings_from_json(R"({"clip": {"cut": {"offset": "far"}}})");
+  CHECK(cut.status().message().find("offset") != std::string::npos);
 }
 
 TEST_CASE("scene: transform, timepoint, channels, viewport and renderer survive a JSON round trip bit for bit") {

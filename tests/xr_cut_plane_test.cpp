@@ -208,30 +208,31 @@ TEST_CASE("cut plane: the menu cycles roi -> cut -> count, and while cutting the
   CHECK(hands.update(in, plain(), 0).stored);
 }
 
-TEST_CASE("cut plane: a Scene keeps the cut plane through JSON exactly, and older scenes have none") {
+TEST_CASE("cut plane: the settings' clip keeps a plane through JSON exactly, older files have none, a bad one is refused") {
+  RenderSettings rs;
+  rs.clip.cut = true;
+  rs.clip.cut_normal = {0.1, -0.7000000000000001, 1.0 / 3.0};
+  rs.clip.cut_offset = -123.456789012345678;
   Scene sc;
-  sc.cut = {true, {0.1, -0.7000000000000001, 1.0 / 3.0}, -123.456789012345678};
-  const std::string text = scene_to_json(sc);
-  auto back = scene_from_json(text);
+  sc.render = rs;
+  auto back = scene_from_json(scene_to_json(sc));
   REQUIRE_MESSAGE(back.is_ok(), back.status().to_string());
-  CHECK(back->cut == sc.cut);
+  CHECK(back->render.clip == rs.clip);
   CHECK(*back == sc);
-  const CutPlane lod = cut_plane_of(back->cut);
-  CHECK(lod.enabled);
-  CHECK(lod.normal == glm::dvec3(0.1, -0.7000000000000001, 1.0 / 3.0));
-  CHECK(cut_plane_state(lod) == sc.cut);
 
   auto old = scene_from_json(R"({"volume": "x.vxc", "lod_bias": 1})");
   REQUIRE(old.is_ok());
-  CHECK(!old->cut.enabled);
-  CHECK(scene_to_json(Scene{}).find("\"cut\"") == std::string::npos);  // no plane, no key
+  CHECK(!old->render.clip.cut);
+  CHECK(scene_to_json(Scene{}).find("\"clip\"") == std::string::npos);  // no plane, no key
 
-  for (const char* bad : {R"({"cut": {"normal": [0, 0, 0], "offset": 1}})", R"({"cut": {"normal": [1, 0, 0]}})",
-                          R"({"cut": [1, 0, 0, 2]})", R"({"cut": {"normal": [1, 0], "offset": 1}})"}) {
+  for (const char* bad : {R"({"clip": {"cut": {"normal": [0, 0, 0], "offset": 1}}})",
+                          R"({"clip": {"cut": {"normal": [1, 0, 0]}}})", R"({"clip": {"cut": [1, 0, 0, 2]}})",
+                          R"({"clip": {"cut": {"normal": [1, 0], "offset": 1}}})",
+                          R"({"clip": {"roi": {"lo": [0, 0, 0.5], "hi": [1, 1, 0.5]}}})"}) {
     CAPTURE(bad);
-    auto r = scene_from_json(bad);
+    auto r = render_settings_from_json(bad);
     REQUIRE(!r.is_ok());
-    CHECK(r.status().message().find("cut") != std::string::npos);
+    CHECK(r.status().message().find("clip") != std::string::npos);
   }
 }
 
@@ -418,9 +419,7 @@ TEST_CASE("cut plane through the OpenXR test runtime: a starting plane (a card's
   CHECK(!whole->cut.enabled);
   auto whole_eye = read_png(dir + "/dump/frame000006_left.png");
   REQUIRE(whole_eye.is_ok());
-  Scene card;
-  card.cut = cut_plane_state(expected_cut(placement));
-  o.frame.lod.cut = cut_plane_of(card.cut);
+  o.frame.lod.cut = expected_cut(placement);
   auto cut = run_view(openxr, *source, o, default_volume_transform(placement));
   REQUIRE_MESSAGE(cut.is_ok(), cut.status().to_string());
   CHECK(cut->cut.offset == o.frame.lod.cut.offset);
@@ -430,7 +429,7 @@ TEST_CASE("cut plane through the OpenXR test runtime: a starting plane (a card's
   CHECK_MESSAGE(test::core_validation_messages(dir).empty(), test::core_validation_messages(dir));
 }
 
-TEST_CASE("cut plane in a card: vxr render draws a Scene's plane, --save-card keeps it, --card draws it again") {
+TEST_CASE("cut plane in a card: vxr render draws a Scene's clip plane, --save-card keeps it, --card draws it again") {
   const fs::path dir = test::scratch_dir("cut_plane", "render_card");
   const fs::path store = dir / "store";
   {
@@ -438,8 +437,8 @@ TEST_CASE("cut plane in a card: vxr render draws a Scene's plane, --save-card ke
     REQUIRE(s.is_ok());
   }
   const std::string input = q(std::string(VXR_TESTDATA_DIR) + "/tiff/mri-stack-calibrated.tif");
-  // Keeps the voxels with x >= 93 (the right half of the 186-wide MRI stack).
-  std::ofstream(dir / "scene.json") << R"({"cut": {"normal": [1, 0, 0], "offset": -93}})";
+  // Keeps the voxels with x >= 93 (the right half of the 186-wide MRI stack; volume fractions).
+  std::ofstream(dir / "scene.json") << R"({"render": {"clip": {"cut": {"normal": [1, 0, 0], "offset": -0.5}}}})";
   test::CliRun r = test::run_vxr("render " + input + " --settings " + q(dir / "scene.json") + " --size 48x48 -o " +
                                      q(dir / "cut.png") + " --save-card " + q(store),
                                  dir, 180);

@@ -21,7 +21,7 @@ TEST_CASE("desktop: the window opens under Xvfb and the screenshot shows the vol
   test::GpuTestScope scope;
   const std::string dir = test::xr_out_dir("desktop");
   const std::string shot = dir + "/screenshot.png";
-  const test::ChildResult r = test::run_child("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(VXR_BINARY) +
+  const test::ChildResult r = test::run_child(test::own_config(dir) + "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(VXR_BINARY) +
                                               " view --sample --desktop --no-ui --frames 3 --width 128 --height 128"
                                               " --screenshot " + shot);
   INFO(r.output);
@@ -80,7 +80,7 @@ TEST_CASE("desktop: --mirror shows exactly what the headset's swapchain images h
   const std::string dir = test::xr_out_dir("mirror");
   test::use_test_runtime(dir, R"({"view": {"width": 64, "height": 64}, "dump_frames": [3]})");
   const std::string shot = dir + "/mirror.png";
-  const test::ChildResult r = test::run_child("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(VXR_BINARY) +
+  const test::ChildResult r = test::run_child(test::own_config(dir) + "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(VXR_BINARY) +
                                               " view --sample --xr --mirror --frames 3 --width 64 --height 64"
                                               " --screenshot " + shot);
   INFO(r.output);

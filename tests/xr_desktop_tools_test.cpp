@@ -72,7 +72,8 @@ size_t differing(const ImageRgba8& a, const ImageRgba8& b) {
 }
 
 std::string viewer(const std::string& input, const std::string& script, const std::string& extra) {
-  return "xvfb-run -a -s '-screen 0 1280x768x24' " + std::string(VXR_BINARY) + " view " + input +
+  return test::own_config(std::filesystem::path(script).parent_path().string()) +
+         "xvfb-run -a -s '-screen 0 1280x768x24' " + std::string(VXR_BINARY) + " view " + input +
          " --desktop --width " + std::to_string(kWidth) + " --height " + std::to_string(kHeight) + " --ui-script " +
          script + " " + extra;
 }
@@ -482,7 +483,7 @@ TEST_CASE("desktop viewer: in the side-by-side stereo window a click picks throu
                                .dump(1);
   const std::string store_dir = dir + "/store";
   REQUIRE(annotate::AnnotationStore::open(store_dir, true).is_ok());
-  const test::ChildResult r = test::run_child("xvfb-run -a -s '-screen 0 1280x768x24' " + std::string(VXR_BINARY) +
+  const test::ChildResult r = test::run_child(test::own_config(dir) + "xvfb-run -a -s '-screen 0 1280x768x24' " + std::string(VXR_BINARY) +
                                               " view " + kMri + " --desktop --stereo --width 240 --height 360 "
                                               "--ui-script " + script + " --annotations " + store_dir);
   INFO(r.output);

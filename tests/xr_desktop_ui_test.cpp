@@ -10,9 +10,12 @@
 #include <fstream>
 
 #include "annotate/annotation_store.h"
+#include "assets/assets.h"
 #include "core/image.h"
 #include "volume/dense_chunk_source.h"
+#include "xr/desktop/desktop_target.h"
 #include "xr/desktop/viewer_setup.h"
+#include "xr/view_session.h"
 #include "xr_test_util.h"
 
 using namespace vxr;
@@ -23,7 +26,8 @@ const std::string kMri = std::string(VXR_TESTDATA_DIR) + "/slices/mri-stack";
 constexpr uint32_t kWidth = 480, kHeight = 360;
 
 std::string viewer_command(const std::string& script, const std::string& extra) {
-  return "xvfb-run -a -s '-screen 0 1024x768x24' " + std::string(VXR_BINARY) + " view " + kMri +
+  return test::own_config(std::filesystem::path(script).parent_path().string()) +
+         "xvfb-run -a -s '-screen 0 1024x768x24' " + std::string(VXR_BINARY) + " view " + kMri +
          " --desktop --width " + std::to_string(kWidth) + " --height " + std::to_string(kHeight) + " --ui-script " +
          script + " " + extra;
 }
@@ -326,7 +330,7 @@ TEST_CASE("desktop viewer: playback of the 7-timepoint OME-TIFF shows the timepo
     steps.push_back(s);
   const std::string script = dir + "/play.json";
   std::ofstream(script) << steps.dump(1);
-  const test::ChildResult r = test::run_child("VXR_LOG=info xvfb-run -a -s '-screen 0 1024x768x24' " +
+  const test::ChildResult r = test::run_child(test::own_config(dir) + "VXR_LOG=info xvfb-run -a -s '-screen 0 1024x768x24' " +
                                               std::string(VXR_BINARY) + " view " + vxc + " --desktop --width " +
                                               std::to_string(kWidth) + " --height " + std::to_string(kHeight) +
                                               " --ui-script " + script);
@@ -383,6 +387,196 @@ TEST_CASE("desktop viewer: playback of the 7-timepoint OME-TIFF shows the timepo
   CHECK(distance(image("paused0"), image("paused1")) == 0);
 }
 
+TEST_CASE("desktop viewer: the opacity curve, the cut plane, the clip box and flight change the picture as they should") {
+  const std::string dir = test::xr_out_dir("desktop_ui_clip");
+  auto shot = [&](const std::string& name) { return dir + "/" + name + ".png"; };
+  const std::string script = dir + "/clip.json";
+  std::ofstream(script) << nlohmann::json::array({
+                               "wait 3", "ui off", "view 3", "wait 1",
+                               "screenshot " + shot("base"),
+                               "opacity 0 0:0,0.5:0,1:0.3",  // the lower half of the window transparent
+                               "screenshot " + shot("faint"),
+                               "opacity 0 ramp",
+                               "screenshot " + shot("ramp"),
+                               "cut x 0.5",  // keeps x >= half: the plane through the eye, seen edge-on
+                               "screenshot " + shot("cut"),
+                               "cut off",
+                               "clip 0.3 0.3 0 0.7 0.7 1",  // a square column along the view
+                               "screenshot " + shot("box"),
+                               "clip off",
+                               "fly 0.4 0 0",  // forward: the volume comes closer
+                               "screenshot " + shot("flown"),
+                           })
+                               .dump(1);
+  const test::ChildResult r = test::run_child(viewer_command(script, ""));
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);  // validation is on: any Vulkan message would exit 3
+  std::map<std::string, ImageRgba8> img;
+  for (const char* name : {"base", "faint", "ramp", "cut", "box", "flown"}) {
+    auto png = read_png(shot(name));
+    REQUIRE_MESSAGE(png.is_ok(), name);
+    img[name] = std::move(png).value();
+  }
+  const Tint base = tint(img["base"], 0, kHeight);
+  REQUIRE(base.pixels > kWidth * kHeight / 10);
+
+  // A curve with less opacity everywhere draws a fainter picture; back to the ramp, the same one.
+  const Tint faint = tint(img["faint"], 0, kHeight);
+  MESSAGE("luminance: ramp " << base.luminance << ", faint curve " << faint.luminance);
+  CHECK(faint.luminance < base.luminance * 0.8);
+  CHECK(differing(img["base"], img["ramp"], 0, 0, kWidth, kHeight) == 0);
+
+  // Looking along -z from the volume's centre line, the plane x = half passes through the eye: the
+  // half of the window showing x < half goes dark, the other half is drawn exactly as before.
+  const uint32_t half = kWidth / 2;
+  auto lit_in = [](const ImageRgba8& im, uint32_t x0, uint32_t x1) {
+    size_t n = 0;
+    for (uint32_t y = 0; y < im.height; ++y)
+      for (uint32_t x = x0; x < x1; ++x) n += std::max({im.at(x, y)[0], im.at(x, y)[1], im.at(x, y)[2]}) > 24;
+    return n;
+  };
+  const size_t before_left = lit_in(img["base"], 0, half - 2), after_left = lit_in(img["cut"], 0, half - 2);
+  const size_t changed_right = differing(img["base"], img["cut"], half + 2, 0, kWidth, kHeight);
+  MESSAGE("cut: lit pixels left of the plane " << before_left << " -> " << after_left << ", right of it "
+                                                << changed_right << " differ");
+  CHECK(before_left > kWidth * kHeight / 20);
+  CHECK(after_left < before_left / 20);
+  CHECK(changed_right < kWidth * kHeight / 1000);
+
+  // The box keeps a column about the view's centre line: the middle is as before, the rest of the head is gone.
+  const size_t box_lit = tint(img["box"], 0, kHeight).pixels;
+  MESSAGE("box: lit pixels " << base.pixels << " -> " << box_lit);
+  CHECK(box_lit < base.pixels / 2);
+  CHECK(box_lit > 0);
+  CHECK(differing(img["base"], img["box"], half - 10, kHeight / 2 - 10, half + 10, kHeight / 2 + 10) == 0);
+
+  // Flying forward brings the volume closer: it covers more of the window.
+  const size_t flown_lit = tint(img["flown"], 0, kHeight).pixels;
+  MESSAGE("fly: lit pixels " << base.pixels << " -> " << flown_lit);
+  CHECK(flown_lit > base.pixels * 5 / 4);
+}
+
+// One window on the sample with a remembered view (ViewerSetup::view_memory, restore_view), run by
+// the next case in a child of this test binary under xvfb-run (the test process has no display).
+TEST_CASE("vxr render: a --settings file's clip cuts the picture as the window's does") {
+  const std::string dir = test::xr_out_dir("render_clip");
+  auto render = [&](const std::string& name, const std::string& clip_json) {
+    // Every run through a settings file: one without "clip" is the reference (a file's defaults, not the flags').
+    const std::string settings = dir + "/" + name + ".json";
+    std::ofstream(settings) << (clip_json.empty() ? std::string("{}") : "{\"clip\": " + clip_json + "}");
+    const test::ChildResult r = test::run_child(std::string(VXR_BINARY) + " render " + kMri + " -o " + dir + "/" +
+                                                name + ".png --size 160x120 --settings " + settings);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    auto png = read_png(dir + "/" + name + ".png");
+    REQUIRE(png.is_ok());
+    return std::move(png).value();
+  };
+  const ImageRgba8 plain = render("plain", "");
+  const ImageRgba8 whole = render("whole", R"({"roi": {"lo": [0, 0, 0], "hi": [1, 1, 1]}})");
+  const ImageRgba8 half = render("half", R"({"cut": {"normal": [1, 0, 0], "offset": -0.5}})");
+  const ImageRgba8 none = render("none", R"({"cut": {"normal": [1, 0, 0], "offset": -1.5}})");
+  const size_t lit = tint(plain, 0, plain.height).pixels, lit_half = tint(half, 0, half.height).pixels;
+  MESSAGE("lit pixels: whole volume " << lit << ", x >= half kept " << lit_half);
+  CHECK(differing(plain, whole, 0, 0, plain.width, plain.height) == 0);  // a box around everything clips nothing
+  CHECK(lit_half < lit * 3 / 4);
+  CHECK(lit_half > lit / 4);
+  CHECK(tint(none, 0, none.height, 0).pixels == 0);  // the plane keeps x >= 1.5 of the volume: nothing
+}
+
+TEST_CASE("desktop viewer memory: one window run (the Xvfb half of the next case)" * doctest::skip()) {
+  const char* memory = std::getenv("VXR_VIEW_MEMORY");
+  const char* script = std::getenv("VXR_VIEW_MEMORY_SCRIPT");
+  REQUIRE((memory && script));
+  auto volume = assets::sample_volume();
+  REQUIRE(volume.is_ok());
+  const VolumePlacement placement{volume->dims, volume->voxel_size};
+  std::vector<DenseVolume> channels{*volume};
+  auto source = DenseChunkSource::create(std::move(channels));
+  REQUIRE(source.is_ok());
+  auto setup = std::make_shared<xr::ViewerSetup>();
+  setup->dataset = "sample";
+  setup->scene.volume = "sample";
+  setup->scene.render = default_view_settings();
+  setup->placement = placement;
+  setup->transform = xr::default_volume_transform(placement);
+  setup->view_memory = memory;
+  setup->restore_view = true;
+  auto ui = xr::load_ui_script(script, xr::ViewerState(setup->scene, 1, setup->data_range), {}, false);
+  REQUIRE(ui.is_ok());
+  setup->script = std::move(ui).value();
+  xr::DesktopOptions o;
+  o.width = 256;
+  o.height = 192;
+  o.viewer = setup;
+  xr::ViewOptions vo;
+  vo.settings = setup->scene.render;
+  auto window = [&]() -> Result<std::unique_ptr<xr::FrameTarget>> {
+    auto t = xr::DesktopTarget::create(o);
+    if (!t) return t.status();
+    return std::unique_ptr<xr::FrameTarget>(std::move(t).value());
+  };
+  auto stats = xr::run_view(window, *source, vo, setup->transform);
+  REQUIRE_MESSAGE(stats.is_ok(), stats.status().message());
+}
+
+TEST_CASE("desktop viewer: the next window on the same dataset starts where the last one closed") {
+  const std::string dir = test::xr_out_dir("desktop_ui_memory");
+  const std::string memory = dir + "/views/sample.json";
+  std::filesystem::remove_all(dir + "/views");
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  auto run = [&](const std::string& name, const nlohmann::json& steps) {
+    const std::string script = dir + "/" + name + ".json";
+    std::ofstream(script) << steps.dump(1);
+    return test::run_child("VXR_VIEW_MEMORY=" + memory + " VXR_VIEW_MEMORY_SCRIPT=" + script +
+                           " xvfb-run -a -s '-screen 0 1024x768x24' " + self +
+                           " --no-skip -tc='desktop viewer memory: one window run*'");
+  };
+  auto shot = [&](const std::string& name) { return dir + "/" + name + ".png"; };
+  // First run: a changed view, its picture.
+  const test::ChildResult first = run("first", nlohmann::json::array({"wait 2", "ui off", "colormap 0 viridis", "orbit 60 20",
+                                                                       "zoom 2", "cut z 0.4", "opacity 0 0:0,1:0.5", "wait 1",
+                                                                       "screenshot " + shot("first")}));
+  INFO(first.output);
+  REQUIRE(first.exit_code == 0);
+  std::ifstream in(memory);
+  REQUIRE(in.good());
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto scene = scene_from_json(text);
+  REQUIRE(scene.is_ok());
+  CHECK(scene->volume == "sample");
+  CHECK(scene->has_camera);
+  CHECK(scene->render.channels.front().colormap == "viridis");
+  CHECK(scene->render.channels.front().opacity_points.size() == 2);
+  CHECK(scene->render.clip.cut);
+
+  // Second run, no edits: the same picture.
+  const test::ChildResult second = run("second", nlohmann::json::array({"wait 3", "ui off", "screenshot " + shot("second")}));
+  INFO(second.output);
+  REQUIRE(second.exit_code == 0);
+  auto a = read_png(shot("first"));
+  auto b = read_png(shot("second"));
+  REQUIRE(a.is_ok());
+  REQUIRE(b.is_ok());
+  const size_t moved = differing(*a, *b, 0, 0, a->width, a->height);
+  MESSAGE("pixels differing between the first run's last picture and the second's first: " << moved);
+  CHECK(moved < a->width * a->height / 1000);  // the orbit comes back from the saved camera to rounding
+
+  // A corrupt memory: one warning naming it, and the default view.
+  std::ofstream(memory) << "{\"render\": 7";
+  const test::ChildResult third = run("third", nlohmann::json::array({"wait 3", "ui off", "screenshot " + shot("third")}));
+  INFO(third.output);
+  REQUIRE(third.exit_code == 0);
+  CHECK(third.output.find("viewer: " + memory + ": not a remembered view") != std::string::npos);
+  auto c = read_png(shot("third"));
+  REQUIRE(c.is_ok());
+  CHECK(differing(*a, *c, 0, 0, a->width, a->height) > a->width * a->height / 10);
+  // ... and closing wrote a good one over it.
+  std::ifstream again(memory);
+  const std::string rewritten((std::istreambuf_iterator<char>(again)), std::istreambuf_iterator<char>());
+  CHECK(scene_from_json(rewritten).is_ok());
+}
+
 TEST_CASE("desktop viewer: a bad UI script is one line naming the file and the step") {
   const std::string dir = test::xr_out_dir("desktop_ui_bad");
   struct Case {
@@ -405,6 +599,9 @@ TEST_CASE("desktop viewer: a bad UI script is one line naming the file and the s
        "step 3 ('export-movie " + dir + "/m 1'): usage: export-movie OUT FRAMES"},
       {nlohmann::json::array({"wait 1", "play"}), "step 2 ('play'): one timepoint: nothing to play"},
       {nlohmann::json::array({"wait 1", "window 0 50 10"}), "step 2 ('window 0 50 10'): "},
+      {nlohmann::json::array({"opacity 0 0.5:0,0.2:1"}), "step 1 ('opacity 0 0.5:0,0.2:1'): opacity points need x rising"},
+      {nlohmann::json::array({"cut w 0.5"}), "step 1 ('cut w 0.5'): usage: cut off|on"},
+      {nlohmann::json::array({"clip 0.5 0 0 0.4 1 1"}), "step 1 ('clip 0.5 0 0 0.4 1 1'): the clip box needs"},
       {nlohmann::json::array({"screenshot " + kMri}), "step 1 ('screenshot "},
       {nlohmann::json::array({"wait 1", 7}), "step 2: expected a string"},
       {nlohmann::json::object({{"no", "steps"}}), "expected a list of steps"},
@@ -422,6 +619,29 @@ TEST_CASE("desktop viewer: a bad UI script is one line naming the file and the s
     CHECK(r.output.find(c.expect) != std::string::npos);
     CHECK(std::count(r.output.begin(), r.output.end(), '\n') == 1);
   }
+}
+
+TEST_CASE("desktop viewer: vxr view reopens a dataset at its last view unless a look flag is given") {
+  const std::string dir = test::xr_out_dir("desktop_ui_remembered");
+  std::filesystem::remove_all(dir + "/config");  // a rerun starts with no memory
+  const std::string first = dir + "/first.json", second = dir + "/second.json", third = dir + "/third.json";
+  std::ofstream(first) << nlohmann::json::array(
+      {"ui off", "wait 2", "colormap 0 viridis", "orbit 40 0", "wait 2", "screenshot " + dir + "/last.png"});
+  std::ofstream(second) << nlohmann::json::array({"ui off", "wait 2", "screenshot " + dir + "/reopened.png"});
+  std::ofstream(third) << nlohmann::json::array({"ui off", "wait 2", "screenshot " + dir + "/flagged.png"});
+  for (const auto& [script, extra] : {std::pair{first, ""}, std::pair{second, ""}, std::pair{third, "--colormap hot"}}) {
+    const test::ChildResult r = test::run_child(viewer_command(script, extra));
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+  }
+  auto last = read_png(dir + "/last.png");
+  auto reopened = read_png(dir + "/reopened.png");
+  auto flagged = read_png(dir + "/flagged.png");
+  REQUIRE(last.is_ok());
+  REQUIRE(reopened.is_ok());
+  REQUIRE(flagged.is_ok());
+  CHECK(reopened->pixels == last->pixels);  // colour map and camera came back
+  CHECK(flagged->pixels != last->pixels);   // --colormap: the flags' look, not the memory
 }
 
 TEST_CASE("desktop viewer: the window follows a resize and the next viewer opens at that size") {

@@ -57,6 +57,13 @@ struct ChildResult {
 };
 
 // Runs `command` through the shell, capturing stdout and stderr.
+// A command prefix giving a viewer its own config folder under `dir` (window
+// size, remembered views per dataset), so tests neither read the user's nor
+// each other's.
+inline std::string own_config(const std::string& dir) {
+  return "XDG_CONFIG_HOME=" + (std::filesystem::path(dir) / "config").string() + " ";
+}
+
 inline ChildResult run_child(const std::string& command) {
   ChildResult r;
   FILE* p = popen((command + " 2>&1").c_str(), "r");

@@ -3,6 +3,7 @@
 // navigation camera keeps its invariants.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <imgui.h>
 
 #include "annotate/annotation_store.h"
+#include "render/volume_renderer.h"
 #include "xr/desktop/viewer_keys.h"
 #include "xr/desktop/viewer_panels.h"
 #include "xr/desktop/viewer_state.h"
@@ -433,5 +435,289 @@ TEST_CASE("tools panel: the live trace, track and box follow every tool event, s
   CHECK(skeletons == 1);
   CHECK(tracks == 1);
   CHECK_FALSE(panel.remove.has_value());  // nothing pressed
+  ImGui::DestroyContext(ctx);
+}
+
+TEST_CASE("viewer state: the opacity curve is edited point by point from the ramp and refuses bad curves") {
+  ViewerState v = two_channels();
+  CHECK(v.opacity_curve(0) == std::vector<OpacityPoint>{{0, 0}, {1, 1}});  // no points: the ramp
+  const uint64_t r0 = v.revision();
+  auto added = v.add_opacity_point(0, 0.5, 0.1);
+  REQUIRE(added.is_ok());
+  CHECK(*added == 1);
+  CHECK(v.render().channels[0].opacity_points == std::vector<OpacityPoint>{{0, 0}, {0.5, 0.1}, {1, 1}});
+  CHECK(v.render().channels[1].opacity_points.empty());
+  CHECK(v.revision() == r0 + 1);
+  // A dragged point stops at its neighbours and inside 0..1.
+  REQUIRE(v.move_opacity_point(0, 1, 1.5, 2.0).is_ok());
+  CHECK(v.render().channels[0].opacity_points[1] == OpacityPoint{1.0, 1.0});
+  REQUIRE(v.move_opacity_point(0, 1, 0.25, 0.3).is_ok());
+  CHECK(v.render().channels[0].opacity_points[1] == OpacityPoint{0.25, 0.3});
+  CHECK_FALSE(v.move_opacity_point(0, 3, 0.5, 0.5).is_ok());
+  REQUIRE(v.remove_opacity_point(0, 0).is_ok());
+  CHECK(v.render().channels[0].opacity_points == std::vector<OpacityPoint>{{0.25, 0.3}, {1, 1}});
+  const uint64_t r1 = v.revision();
+  CHECK_FALSE(v.remove_opacity_point(0, 0).is_ok());  // two points left: a curve keeps them
+  CHECK_FALSE(v.set_opacity_points(0, {{0.5, 0.2}, {0.4, 0.3}}).is_ok());  // x falls
+  CHECK_FALSE(v.set_opacity_points(0, {{0.5, 1.2}}).is_ok());
+  CHECK_FALSE(v.set_opacity_points(2, {}).is_ok());
+  CHECK(v.revision() == r1);
+  // Script: pairs, and "ramp" back to no points.
+  REQUIRE(v.apply_command("opacity 1 0:0,0.5:0.2,1:1").is_ok());
+  CHECK(v.render().channels[1].opacity_points == std::vector<OpacityPoint>{{0, 0}, {0.5, 0.2}, {1, 1}});
+  REQUIRE(v.apply_command("opacity 1 ramp").is_ok());
+  CHECK(v.render().channels[1].opacity_points.empty());
+  for (const char* bad : {"opacity 0", "opacity 0 0:0,1", "opacity 0 0.5:0,0.2:1", "opacity 0 0:2", "opacity 5 0:0",
+                          "opacity 0 a:b"}) {
+    const Status s = v.apply_command(bad);
+    CHECK_MESSAGE(!s.is_ok(), bad);
+    CHECK(s.message().find(bad) != std::string::npos);
+  }
+}
+
+TEST_CASE("viewer state: cut plane and clip box land in the settings' clip, in volume fractions") {
+  ViewerState v = two_channels();
+  CHECK_FALSE(v.render().clip.cut);
+  CHECK_FALSE(v.render().clip.roi);
+  REQUIRE(v.apply_command("cut z 0.25").is_ok());
+  const ClipSettings& c = v.render().clip;
+  CHECK(c.cut);
+  CHECK(c.cut_normal == std::array<double, 3>{0, 0, 1});
+  CHECK(c.cut_offset == -0.25);  // keeps z >= 0.25
+  REQUIRE(v.apply_command("cut -x 0.75").is_ok());
+  CHECK(c.cut_normal == std::array<double, 3>{-1, 0, 0});
+  CHECK(c.cut_offset == 0.75);  // keeps x <= 0.75
+  REQUIRE(v.apply_command("cut 3 4 0 -0.5").is_ok());
+  CHECK(c.cut_normal[0] == doctest::Approx(0.6));
+  CHECK(c.cut_normal[1] == doctest::Approx(0.8));
+  CHECK(c.cut_offset == -0.5);
+  REQUIRE(v.apply_command("cut off").is_ok());
+  CHECK_FALSE(c.cut);
+  CHECK(c.cut_normal[1] == doctest::Approx(0.8));  // off keeps the plane for "cut on"
+  REQUIRE(v.apply_command("clip 0.1 0.2 0 0.9 0.8 1").is_ok());
+  CHECK(c.roi);
+  CHECK(c.roi_lo == std::array<double, 3>{0.1, 0.2, 0});
+  CHECK(c.roi_hi == std::array<double, 3>{0.9, 0.8, 1});
+  const uint64_t r = v.revision();
+  for (const char* bad : {"cut", "cut w 0.5", "cut z 1.5", "cut 0 0 0 1", "cut z", "clip 0.5 0 0 0.4 1 1",
+                          "clip 0 0 0 1 1 2", "clip 0 0 0 1 1", "clip maybe"}) {
+    const Status s = v.apply_command(bad);
+    CHECK_MESSAGE(!s.is_ok(), bad);
+    CHECK(s.message().find(bad) != std::string::npos);
+  }
+  CHECK(v.revision() == r);
+  REQUIRE(v.apply_command("clip off").is_ok());
+  CHECK_FALSE(c.roi);
+  // The settings carry the clip through JSON (cards, --settings), and leave it out when off.
+  REQUIRE(v.apply_command("cut y 0.5").is_ok());
+  REQUIRE(v.apply_command("clip on").is_ok());
+  auto back = render_settings_from_json(render_settings_to_json(v.render()));
+  REQUIRE(back.is_ok());
+  CHECK(back->clip == v.render().clip);
+  CHECK(render_settings_to_json(RenderSettings{}).find("clip") == std::string::npos);
+  // In level-0 voxels for the traversal: a fraction f is the point f * dims.
+  LodSettings lod;
+  apply_clip(v.render().clip, {100, 200, 50}, lod);
+  CHECK(lod.cut.enabled);
+  CHECK(glm::dot(lod.cut.normal, glm::dvec3(10, 100, 7)) + lod.cut.offset == doctest::Approx(0.0));  // y = 0.5 * 200
+  CHECK(lod.roi.enabled);
+  CHECK(lod.roi.lo == glm::dvec3(10, 40, 0));
+  CHECK(lod.roi.hi == glm::dvec3(90, 160, 50));
+}
+
+TEST_CASE("viewer state: fly moves the orbit centre and the eye together along the view, and keys name the directions") {
+  ViewerState v = two_channels();
+  REQUIRE(v.axis_view(2).is_ok());  // looking along -z
+  const CameraState before = v.camera();
+  v.fly({1, 0, 0}, 0.2);
+  CameraState c = v.camera();
+  CHECK(c.target[2] == doctest::Approx(before.target[2] - 0.2));
+  CHECK(c.eye[2] == doctest::Approx(before.eye[2] - 0.2));
+  CHECK(dist(c.eye, c.target) == doctest::Approx(dist(before.eye, before.target)));
+  v.fly({0, 1, 1}, 0.1);  // right is +x, up is +y looking along -z
+  c = v.camera();
+  CHECK(c.target[0] == doctest::Approx(before.target[0] + 0.1));
+  CHECK(c.target[1] == doctest::Approx(before.target[1] + 0.1));
+  // Held keys: half the orbit distance per second, a stalled frame capped at 0.1 s.
+  const double d = v.orbit().distance;
+  const auto focus = v.orbit().focus;
+  v.fly_for({-1, 0, 0}, 5.0);
+  CHECK(v.orbit().focus[2] == doctest::Approx(focus[2] + 0.5 * d * 0.1));
+  const uint64_t r = v.revision();
+  v.fly_for({}, 0.05);  // nothing held: nothing changes
+  CHECK(v.revision() == r);
+  REQUIRE(v.apply_command("fly 0 0 0.3").is_ok());
+  CHECK(v.orbit().focus[1] == doctest::Approx(focus[1] + 0.3));
+  CHECK_FALSE(v.apply_command("fly 1 0").is_ok());
+  // W/S, D/A, E/Q as the window polls them, and the help table lists them.
+  auto held = [](std::initializer_list<int> keys) {
+    return held_fly_keys([keys](int k) { return std::find(keys.begin(), keys.end(), k) != keys.end(); });
+  };
+  CHECK(held({GLFW_KEY_W}).forward == 1);
+  CHECK(held({GLFW_KEY_S}).forward == -1);
+  CHECK(held({GLFW_KEY_W, GLFW_KEY_S}).forward == 0);
+  CHECK(held({GLFW_KEY_D}).right == 1);
+  CHECK(held({GLFW_KEY_A}).right == -1);
+  CHECK(held({GLFW_KEY_E}).up == 1);
+  CHECK(held({GLFW_KEY_Q}).up == -1);
+  CHECK_FALSE(held({GLFW_KEY_R}).any());
+  int fly_rows = 0;
+  for (const ShortcutHelp& s : viewer_shortcuts()) fly_rows += std::string(s.action).find("fly") == 0;
+  CHECK(fly_rows == 3);
+}
+
+TEST_CASE("viewer state: the remembered view is keyed by the input, kept inside a project, and a bad file named") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(VXR_TEST_OUT_DIR) / "viewer_state_memory";
+  fs::remove_all(dir);
+  const char* old = std::getenv("XDG_CONFIG_HOME");
+  const std::string saved = old ? old : "";
+  setenv("XDG_CONFIG_HOME", (dir / "config").c_str(), 1);
+  const std::string a = remembered_view_path((dir / "a.tif").string());
+  const std::string b = remembered_view_path((dir / "b.tif").string());
+  CHECK(a.rfind((dir / "config" / "vxr" / "views").string() + "/", 0) == 0);
+  CHECK(a != b);
+  CHECK(a == remembered_view_path((dir / "a.tif").string()));
+  // A project keeps it inside: for the folder and for a file in it.
+  fs::create_directories(dir / "brain.vxr");
+  std::ofstream(dir / "brain.vxr" / "project.json") << "{}";
+  CHECK(remembered_view_path((dir / "brain.vxr").string()) == (dir / "brain.vxr" / "viewer.json").string());
+  CHECK(remembered_view_path((dir / "brain.vxr" / "volume.vxc").string()) ==
+        (dir / "brain.vxr" / "viewer.json").string());
+  if (old)
+    setenv("XDG_CONFIG_HOME", saved.c_str(), 1);
+  else
+    unsetenv("XDG_CONFIG_HOME");
+
+  auto none = load_remembered_view(a);
+  REQUIRE(none.is_ok());
+  CHECK_FALSE(none->has_value());
+  ViewerState v = two_channels();
+  REQUIRE(v.apply_command("cut x 0.3").is_ok());
+  REQUIRE(v.apply_command("opacity 1 0:0,1:0.4").is_ok());
+  Scene s = v.scene();
+  s.volume = (dir / "a.tif").string();
+  s.camera = v.camera();
+  s.has_camera = true;
+  REQUIRE(save_remembered_view(a, s).is_ok());
+  auto back = load_remembered_view(a);
+  REQUIRE(back.is_ok());
+  REQUIRE(back->has_value());
+  CHECK(**back == s);
+  std::ofstream(a) << "[1, 2";
+  const Status bad = load_remembered_view(a).status();
+  CHECK(bad.code() == ErrorCode::kInvalidArgument);
+  CHECK(bad.message().rfind(a + ": not a remembered view", 0) == 0);
+}
+
+TEST_CASE("viewer state: the view counts as moving for two ticks and 0.2 s after the user moved it, then still") {
+  ViewerState v = two_channels();
+  v.tick(10.0);
+  CHECK_FALSE(v.moving());  // nothing moved yet
+  v.orbit_drag(5, 0);
+  CHECK_FALSE(v.moving());  // commands and scripts draw at full detail: only the window's input counts
+  v.note_motion();
+  CHECK(v.moving());
+  v.tick(10.5);
+  CHECK(v.moving());  // one tick: the frame after the motion is still coarse, however slow
+  v.tick(11.0);
+  CHECK_FALSE(v.moving());  // two ticks and 1 s later: full detail
+  v.note_motion();
+  v.tick(11.01);
+  v.tick(11.02);
+  v.tick(11.03);
+  CHECK(v.moving());  // fast frames: still moving until 0.2 s have passed
+  v.tick(11.25);
+  CHECK_FALSE(v.moving());
+}
+
+TEST_CASE("opacity editor: a click adds a point under the cursor, a drag moves it, a right click removes it") {
+  ImGuiContext* ctx = ImGui::CreateContext();
+  ImGuiIO& io = ImGui::GetIO();
+  io.IniFilename = nullptr;
+  ViewerState v = two_channels();
+  ImVec2 p0{0, 0};
+  float width = 0;
+  constexpr float kHeight = 72.0f;  // the editor's canvas
+  auto frame = [&](float x, float opacity, bool left, bool right) {
+    io.DisplaySize = ImVec2(800, 600);
+    io.DeltaTime = 1.0f / 60;
+    unsigned char* pixels = nullptr;
+    int w = 0, h = 0;
+    io.Fonts->GetTexDataAsRGBA32(&pixels, &w, &h);
+    io.MousePos = ImVec2(p0.x + x * width, p0.y + (1.0f - opacity) * kHeight);
+    io.MouseDown[ImGuiMouseButton_Left] = left;
+    io.MouseDown[ImGuiMouseButton_Right] = right;
+    ImGui::NewFrame();
+    ImGui::SetNextWindowPos(ImVec2(0, 0));
+    ImGui::SetNextWindowSize(ImVec2(400, 300));
+    ImGui::Begin("editor", nullptr, ImGuiWindowFlags_NoDecoration);
+    p0 = ImGui::GetCursorScreenPos();
+    width = std::max(64.0f, ImGui::GetContentRegionAvail().x);
+    draw_opacity_editor(v, 1, nullptr);
+    ImGui::End();
+    ImGui::Render();
+  };
+  frame(0.5f, 0.8f, false, false);  // lays the window out: the canvas's place is known from here on
+  frame(0.5f, 0.8f, false, false);
+  CHECK(v.render().channels[1].opacity_points.empty());  // hovering edits nothing
+  frame(0.5f, 0.8f, true, false);                        // press away from the two points: a new one
+  auto points = v.render().channels[1].opacity_points;
+  REQUIRE(points.size() == 3);
+  CHECK(points[1].x == doctest::Approx(0.5).epsilon(0.01));
+  CHECK(points[1].opacity == doctest::Approx(0.8).epsilon(0.02));
+  frame(0.25f, 0.4f, true, false);  // held and moved: the new point follows
+  frame(0.25f, 0.4f, false, false);
+  points = v.render().channels[1].opacity_points;
+  REQUIRE(points.size() == 3);
+  CHECK(points[1].x == doctest::Approx(0.25).epsilon(0.02));
+  CHECK(points[1].opacity == doctest::Approx(0.4).epsilon(0.02));
+  CHECK(v.render().channels[0].opacity_points.empty());  // another channel's curve
+  frame(0.25f, 0.4f, false, true);  // right click on it: gone
+  frame(0.25f, 0.4f, false, false);
+  CHECK(v.render().channels[1].opacity_points == std::vector<OpacityPoint>{{0, 0}, {1, 1}});
+  ImGui::DestroyContext(ctx);
+}
+
+TEST_CASE("clip controls: clicking the cut plane box turns the plane on and off, drawing alone changes nothing") {
+  ImGuiContext* ctx = ImGui::CreateContext();
+  ImGuiIO& io = ImGui::GetIO();
+  io.IniFilename = nullptr;
+  ViewerState v = two_channels();
+  REQUIRE(v.apply_command("cut -y 0.3").is_ok());
+  REQUIRE(v.apply_command("cut off").is_ok());
+  ImVec2 p0{0, 0};
+  auto frame = [&](bool left) {
+    io.DisplaySize = ImVec2(800, 600);
+    io.DeltaTime = 1.0f / 60;
+    unsigned char* pixels = nullptr;
+    int w = 0, h = 0;
+    io.Fonts->GetTexDataAsRGBA32(&pixels, &w, &h);
+    io.MousePos = ImVec2(p0.x + 6, p0.y + 6);  // inside the first widget's box: the "cut plane" checkbox
+    io.MouseDown[ImGuiMouseButton_Left] = left;
+    ImGui::NewFrame();
+    ImGui::SetNextWindowPos(ImVec2(0, 0));
+    ImGui::SetNextWindowSize(ImVec2(400, 400));
+    ImGui::Begin("clip", nullptr, ImGuiWindowFlags_NoDecoration);
+    p0 = ImGui::GetCursorScreenPos();
+    draw_clip_controls(v);
+    ImGui::End();
+    ImGui::Render();
+  };
+  const uint64_t r0 = v.revision();
+  frame(false);
+  frame(false);
+  CHECK(v.revision() == r0);
+  frame(true);
+  frame(false);  // a click: press, release
+  CHECK(v.render().clip.cut);
+  CHECK(v.render().clip.cut_normal == std::array<double, 3>{0, -1, 0});  // the plane it had
+  CHECK(v.render().clip.cut_offset == 0.3);
+  frame(true);
+  frame(false);
+  CHECK_FALSE(v.render().clip.cut);
+  REQUIRE(v.apply_command("cut 1 1 1 -0.9").is_ok());  // oblique: normal and offset controls instead
+  frame(false);
+  CHECK(v.render().clip.cut);
   ImGui::DestroyContext(ctx);
 }

@@ -48,7 +48,6 @@ struct Options {
   double fov = 0.0, reference_step = 1.0 / 16.0;
   double lod_bias = 0.0, frame_budget_ms = 0.0;
   bool lod_bias_given = false;
-  CutPlaneState cut;  // from a card or a --settings Scene (Scene::cut); drawn by the lod renderer
   int frames = 0;  // 0: until converged (lod) / one frame (dense)
   bool reference = false, stats = false;
   bool no_skip = false;  // lod: no empty-space skipping (bricks or cells), for A/B timing
@@ -115,7 +114,6 @@ int run_lod(const Options& o, gpu::Context& gpu, uint32_t width, uint32_t height
   so.frame_budget_ms = o.frame_budget_ms;
   so.frames = o.frames;
   so.skip_empty = !o.no_skip;
-  so.cut = cut_plane_of(o.cut);  // a card's or a --settings Scene's plane
   so.compare_to_reference = o.json && o.reference;
   so.reference_step = o.reference_step;
   const bool budget = o.frame_budget_ms > 0.0;
@@ -224,7 +222,6 @@ int run(const Options& given) {
     if (o.renderer.empty()) o.renderer = sc.renderer;
     if (!o.path_given && !sc.path.empty()) o.path = sc.path;
     if (!o.lod_bias_given && sc.lod_bias != 0.0) o.lod_bias = sc.lod_bias, o.lod_bias_given = true;
-    o.cut = sc.cut;  // save_card keeps it: the Scene it writes starts from this one
   };
   if (!o.card.empty()) {
     if (!o.flags.settings.empty()) return fail(invalid_argument("give --card or --settings, not both"), kExitUsage);
@@ -278,9 +275,6 @@ int run(const Options& given) {
                 kExitUsage);
   if (renderer == "dense" && !o.flags.annotations.empty())
     return fail(invalid_argument("--annotations: drawn by the out-of-core renderer; drop --renderer dense"), kExitUsage);
-  if (renderer == "dense" && o.cut.enabled)
-    return fail(invalid_argument("the scene's cut plane is drawn by the out-of-core renderer; drop --renderer dense"),
-                kExitUsage);
   if (renderer == "dense" && procedural)
     return fail(invalid_argument("--renderer dense: a procedural source is drawn only by --renderer lod"), kExitUsage);
   if (renderer == "dense" && (o.json || o.no_skip))

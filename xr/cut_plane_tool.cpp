@@ -37,10 +37,14 @@ CutPlaneFrame CutPlaneTool::update(const InputState& input, const VolumeTransfor
     following_ = false;
     out.placed = right.tracked;  // lost tracking freezes the plane where it was last seen, no click
   }
-  if (following_) plane_ = plane_of_hand(right, t);
+  if (following_) {
+    plane_ = plane_of_hand(right, t);
+    owns_ = true;
+  }
   if (pressed[kLeft] && plane_.enabled && !following_) {
     plane_ = CutPlane{};
     out.cleared = true;
+    owns_ = true;
   }
   return out;
 }

@@ -49,8 +49,15 @@ class CutPlaneTool {
 
   // The plane the next frame clips by (disabled: none), in voxel coordinates.
   const CutPlane& plane() const { return plane_; }
-  // Starts from a saved plane (a card's); the triggers take over from there.
-  void set_plane(const CutPlane& plane) { plane_ = plane; }
+  // Whether the frame's cut is this tool's: once the hands placed or cleared
+  // a plane, or one was set. Until then the settings' clip (RenderSettings::clip:
+  // a card's, a --settings file's, the window's panel) decides the cut.
+  bool owns_plane() const { return owns_; }
+  // Starts from a plane (the settings' or a caller's); `own`: it overrides the settings' from the first frame.
+  void set_plane(const CutPlane& plane, bool own) {
+    plane_ = plane;
+    owns_ = own;
+  }
   bool following() const { return following_; }
 
   // The plane through `hand`'s tip, normal along its aim direction, in voxel
@@ -65,6 +72,7 @@ class CutPlaneTool {
   CutPlane plane_;
   std::array<bool, 2> held_{false, false};  // each trigger, active or not (a press is an edge)
   bool following_ = false;                   // pressed while active and not yet released
+  bool owns_ = false;
 };
 
 }  // namespace vxr::xr

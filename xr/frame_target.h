@@ -64,6 +64,9 @@ struct FrameState {
   // draw this frame (settings and timepoint); empty: the session's.
   std::shared_ptr<const RenderSettings> settings;
   uint32_t timepoint = 0;
+  // Added to the frame's LOD bias (log2 voxels per pixel): the desktop viewer
+  // draws coarser while the user moves the view. 0: as the session says.
+  double lod_bias_offset = 0.0;
 };
 
 // Semaphores the frame's one submission waits on and signals, for targets

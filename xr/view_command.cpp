@@ -10,7 +10,6 @@
 #include "annotate/annotation_store.h"
 #include "core/output_file.h"
 #include "render/card_scene.h"
-#include "render/lod/lod_traversal.h"
 #include "annotate/tools.h"
 #include "xr/desktop/ui_script.h"
 #include "xr/desktop/viewer_setup.h"
@@ -253,6 +252,13 @@ Status ViewCommand::build_viewer_setup() {
     if (!script) return by_code(script.status());
     setup->script = std::move(script).value();
   }
+  // The dataset's last view comes back unless the look was asked for (a card, --settings or a look flag).
+  setup->view_memory = remembered_view_path(o_.input);
+  const SessionFlags& f = o_.flags;
+  const bool look_given = !o_.card.empty() || !f.settings.empty() || !f.colormap.empty() || !f.window.empty() ||
+                          !f.model.empty() || f.step != 0.0 || !f.channel.empty() || f.timepoint_given ||
+                          !f.opacity.empty() || !f.opacity_unit_distance.empty() || !f.voxel_size.empty();
+  setup->restore_view = !look_given;
   req_.viewer = std::move(setup);
   // The window opens at the size it had last time (1280x800 at first) unless given.
   if (!o_.width && !o_.height && !o_.stereo) {
@@ -352,8 +358,6 @@ Status ViewCommand::run() {
   // A headset keeps its own head pose and fov: the volume is placed so the head
   // sees what the card's (or a --settings Scene's) camera saw; headless draws the camera itself.
   if (pose_ && choice_->kind == TargetKind::kOpenXr) vo.place_for_camera = req_.headless.camera;
-  // A card's (or a --settings Scene's) cut plane is where the view's plane starts.
-  if (const auto& start = o_.flags.start; start && start->is_scene) vo.frame.lod.cut = cut_plane_of(start->scene.cut);
   VXR_RETURN_IF_ERROR(hand_tools(vo));
   auto stats = run_view(choice_->factory, session_->source, vo, start_);
   if (!stats) return work(stats.status());

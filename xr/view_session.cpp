@@ -232,6 +232,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
 
     BrickFrameSettings fs = options.frame;
     if (options.frame_budget_ms > 0.0) fs.lod.lod_bias = budget.bias;
+    fs.lod.lod_bias += frame->lod_bias_offset;
     if (frame->settings) fs.lod.timepoint = std::min(frame->timepoint, source->info().timepoints - 1);
     if (tools) {
       VXR_RETURN_IF_ERROR(tools->frame(*frame, stats.transform, fs.lod.timepoint, target, *eyes, marker));
@@ -242,8 +243,6 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
       marker_drawn = marker.has_value();
     }
     update_cut(*frame, stats.transform, hands, options, target, motion);  // after the menu's cycle
-    fs.lod.cut = motion.cut.plane();
-    stats.cut = motion.cut.plane();
     if (frame->settings && !(*frame->settings == drawn_settings)) {
       // An edit the brick renderer cannot draw keeps the last picture and says why.
       Status ok = check_brick_settings(*frame->settings, eyes->renderer().channels());
@@ -254,6 +253,9 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
         log_warn("view: settings not applied: " + ok.message());
     }
     const RenderSettings& settings = drawn_settings;
+    apply_clip(settings.clip, source->info().dims, fs.lod);  // the settings' cut plane and box (panels, cards)
+    if (motion.cut.owns_plane()) fs.lod.cut = motion.cut.plane();  // the hands' plane, once they set one
+    stats.cut = fs.lod.cut;
     size_t views_drawn = 0;
     uint64_t missing = 0;
     if (frame->should_render) {
@@ -366,8 +368,12 @@ Result<ViewStats> run_view(const TargetFactory& make_target, std::shared_ptr<con
     hands = std::make_unique<HandTools>(*viewer_tools, placement, options.hand_tools);
   }
   Motion motion{GrabInteraction(), Teleport(placement, options.teleport), CutPlaneTool(placement, options.cut)};
-  motion.cut.set_plane(options.frame.lod.cut);
-  stats.cut = options.frame.lod.cut;
+  // The hands start from the caller's plane if any, else the settings' (which keep deciding until the hands act).
+  LodSettings start_clip;
+  apply_clip(options.settings.clip, info.dims, start_clip);
+  const bool given = options.frame.lod.cut.enabled;
+  motion.cut.set_plane(given ? options.frame.lod.cut : start_clip.cut, given);
+  stats.cut = motion.cut.plane();
   FrameBudget budget;
   budget.target_ms = options.frame_budget_ms;
   budget.bias = options.frame.lod.lod_bias;

@@ -27,7 +27,13 @@ Result<std::vector<uint8_t>> reference_pixels(const VolumeSession& session, cons
   }
   const auto t0 = std::chrono::steady_clock::now();
   ReferenceOptions ro{o.reference_step, 0};
-  if (o.cut.enabled) ro.plane = glm::dvec4(o.cut.normal, o.cut.offset);  // clipped as the bricks are
+  LodSettings clip;  // the settings' cut plane and box, clipped as the bricks are
+  apply_clip(session.settings.clip, session.source->info().dims, clip);
+  if (clip.cut.enabled) ro.plane = glm::dvec4(clip.cut.normal, clip.cut.offset);
+  if (clip.roi.enabled) {
+    ro.clip_lo = clip.roi.lo;
+    ro.clip_hi = clip.roi.hi;
+  }
   VXR_ASSIGN_OR_RETURN(ImageRgbaF ref, render_reference(level0, camera, session.settings, o.width, o.height, ro));
   *cpu_ms = ms_since(t0);
   return over_black(to_rgba8(ref)).pixels;
@@ -65,7 +71,7 @@ Result<StillResult> render_still(gpu::Context& gpu, const VolumeSession& session
   frame.lod.lod_bias = o.lod_bias;
   frame.lod.timepoint = session.timepoint;
   frame.lod.skip_empty = o.skip_empty;
-  frame.lod.cut = o.cut;
+  apply_clip(s.clip, session.source->info().dims, frame.lod);
   const bool budget = o.frame_budget_ms > 0.0;
   FrameBudget controller;
   controller.target_ms = o.frame_budget_ms;
@@ -117,6 +123,9 @@ Result<DenseStill> render_still_dense(gpu::Context* gpu, const std::string& inpu
   step = SessionStep::kSettings;
   VXR_ASSIGN_OR_RETURN(const SessionFlags flags, complete_session_flags(given_flags));
   VXR_ASSIGN_OR_RETURN(SettingsChoice choice, choose_settings(flags));
+  if (choice.settings.clip.cut || choice.settings.clip.roi)
+    return invalid_argument("the settings' clip (cut plane or box) is drawn by the out-of-core renderer; drop --renderer "
+                            "dense");
   if (o.renderer != DenseRenderer::kReference && !gpu) return invalid_argument("the dense GPU ray caster needs a GPU");
   step = SessionStep::kSource;
   VXR_ASSIGN_OR_RETURN(LoadedVolume loaded, load_for_render(input, o.max_dim, uint64_t(1) << 30));

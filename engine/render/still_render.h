@@ -33,7 +33,6 @@ struct StillOptions {
   double frame_budget_ms = 0.0;  // > 0: `frames` frames (30 if 0), the bias following the frame time
   int frames = 0;                // 0: until converged (an error past 1000 frames); else exactly this many
   bool skip_empty = true;        // false: march empty space too (the same image; for A/B timing)
-  CutPlane cut;                  // clips the volume (level-0 voxels; a Scene's cut_plane_of(Scene::cut))
   // Each frame's RMSE against the CPU reference of the finest level (drawn once, at this step).
   bool compare_to_reference = false;
   double reference_step = 1.0 / 16.0;

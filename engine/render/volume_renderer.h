@@ -19,6 +19,7 @@
 
 #include <vulkan/vulkan.h>
 
+#include <array>
 #include <cstdint>
 
 #include "core/status.h"
@@ -39,6 +40,19 @@ struct BrickFrameSettings {
   // (BrickCells; same image). Off: brick-level skipping only (measurements).
   bool skip_cells = true;
 };
+
+// The settings' clipping (volume fractions, scene/render_settings.h) as the
+// traversal's cut plane and ROI in level-0 voxels of a volume `dims` voxels
+// large: a fraction f is the voxel point f * dims.
+inline void apply_clip(const ClipSettings& clip, const std::array<uint64_t, 3>& dims, LodSettings& lod) {
+  const glm::dvec3 d{double(dims[0]), double(dims[1]), double(dims[2])};
+  lod.cut.enabled = clip.cut;
+  lod.cut.normal = glm::dvec3(clip.cut_normal[0], clip.cut_normal[1], clip.cut_normal[2]) / d;
+  lod.cut.offset = clip.cut_offset;
+  lod.roi.enabled = clip.roi;
+  lod.roi.lo = glm::dvec3(clip.roi_lo[0], clip.roi_lo[1], clip.roi_lo[2]) * d;
+  lod.roi.hi = glm::dvec3(clip.roi_hi[0], clip.roi_hi[1], clip.roi_hi[2]) * d;
+}
 
 struct BrickFrameStats {
   LodStats lod;

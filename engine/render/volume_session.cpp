@@ -163,9 +163,9 @@ Result<SettingsStart> read_settings_file(const std::string& path) {
   ss << f.rdbuf();
   const std::string text = ss.str();
   SettingsStart start;
-  // A Scene has a render, camera, volume or cut section; plain RenderSettings have none.
+  // A Scene has a render, camera or volume section; plain RenderSettings have none.
   start.is_scene = text.find("\"render\"") != std::string::npos || text.find("\"camera\"") != std::string::npos ||
-                   text.find("\"volume\"") != std::string::npos || text.find("\"cut\"") != std::string::npos;
+                   text.find("\"volume\"") != std::string::npos;
   if (start.is_scene) {
     auto sc = scene_from_json(text);
     if (!sc) return invalid_argument(path + ": " + sc.status().message());

@@ -22,6 +22,13 @@ const char* depth_name(DepthColorMode m) {
   return "off";
 }
 
+json clip_j(const ClipSettings& c) {
+  json j = json::object();
+  if (c.cut) j["cut"] = {{"normal", c.cut_normal}, {"offset", c.cut_offset}};
+  if (c.roi) j["roi"] = {{"lo", c.roi_lo}, {"hi", c.roi_hi}};
+  return j;
+}
+
 json to_j(const RenderSettings& s) {
   json channels = json::array();
   for (const auto& c : s.channels) {
@@ -35,7 +42,7 @@ json to_j(const RenderSettings& s) {
                         {"color_points", cp},
                         {"opacity_points", op}});
   }
-  return {{"model", optical_model_name(s.model)},
+  json out = {{"model", optical_model_name(s.model)},
           {"channels", channels},
           {"blend", blend_name(s.blend)},
           {"step_voxels", s.step_voxels},
@@ -56,6 +63,9 @@ json to_j(const RenderSettings& s) {
           {"gradient_opacity",
            {{"enabled", s.gradient_opacity.enabled}, {"lo", s.gradient_opacity.lo}, {"hi", s.gradient_opacity.hi}}},
           {"max_steps", s.max_steps}};
+  // Only when clipping is on: files and cards written before clipping existed stay byte for byte the same.
+  if (s.clip.cut || s.clip.roi) out["clip"] = clip_j(s.clip);
+  return out;
 }
 
 // Reads j[key] into out when present; a wrong type throws json::type_error,
@@ -147,21 +157,32 @@ void from_j(const json& j, RenderSettings& s) {
     get(g, "hi", s.gradient_opacity.hi);
   }
   get(j, "max_steps", s.max_steps);
-}
-
-// "cut": {"normal": [x, y, z], "offset": d}; present means enabled.
-void read_cut(const json& c, CutPlaneState& cut) {
-  if (!c.is_object() || !c.contains("normal") || !c.contains("offset"))
-    throw KeyError{"\"cut\" must be an object {normal: [x, y, z], offset} (voxel coordinates)"};
-  const json& n = c.at("normal");
-  if (!n.is_array() || n.size() != 3) throw KeyError{"cut.normal must be [x, y, z] (voxel coordinates)"};
-  get(c, "normal", cut.normal);
-  get(c, "offset", cut.offset);
-  double n2 = 0.0;
-  for (double v : cut.normal) n2 += v * v;
-  if (!(std::isfinite(n2) && n2 > 0.0 && std::isfinite(cut.offset)))
-    throw KeyError{"cut.normal must be a finite non-zero vector and cut.offset a finite number"};
-  cut.enabled = true;
+  if (j.contains("clip")) {
+    const json& c = j.at("clip");
+    if (!c.is_object()) throw KeyError{"\"clip\" must be an object"};
+    if (c.contains("cut")) {
+      const json& cut = c.at("cut");
+      if (!cut.is_object() || !cut.contains("normal") || !cut.contains("offset"))
+        throw KeyError{"clip.cut must be an object {normal: [x, y, z], offset} (volume fractions)"};
+      if (!cut.at("normal").is_array() || cut.at("normal").size() != 3)
+        throw KeyError{"clip.cut.normal must be [x, y, z] (volume fractions)"};
+      s.clip.cut = true;
+      get(cut, "normal", s.clip.cut_normal);
+      get(cut, "offset", s.clip.cut_offset);
+      double n2 = 0.0;
+      for (double v : s.clip.cut_normal) n2 += v * v;
+      if (!(std::isfinite(n2) && n2 > 0.0 && std::isfinite(s.clip.cut_offset)))
+        throw KeyError{"clip.cut.normal must be a finite non-zero vector and clip.cut.offset a finite number"};
+    }
+    if (c.contains("roi")) {
+      s.clip.roi = true;
+      get(c.at("roi"), "lo", s.clip.roi_lo);
+      get(c.at("roi"), "hi", s.clip.roi_hi);
+      for (int a = 0; a < 3; ++a)
+        if (!(std::isfinite(s.clip.roi_lo[a]) && std::isfinite(s.clip.roi_hi[a]) && s.clip.roi_lo[a] < s.clip.roi_hi[a]))
+          throw KeyError{"clip.roi must have finite lo < hi on every axis (volume fractions)"};
+    }
+  }
 }
 
 template <typename T, typename F>
@@ -223,7 +244,6 @@ std::string scene_to_json(const Scene& s) {
   if (s.has_camera)
     j["camera"] = {{"eye", s.camera.eye}, {"target", s.camera.target}, {"up", s.camera.up}, {"fov_y_deg", s.camera.fov_y_deg}};
   if (s.voxel_size != std::array<double, 3>{0, 0, 0}) j["voxel_size"] = s.voxel_size;  // older readers ignore it
-  if (s.cut.enabled) j["cut"] = {{"normal", s.cut.normal}, {"offset", s.cut.offset}};  // older readers ignore it
   return j.dump(2);
 }
 
@@ -268,7 +288,6 @@ Result<Scene> scene_from_json(const std::string& text) {
       for (double v : s.voxel_size)
         if (!(v > 0.0 && std::isfinite(v)))
           throw KeyError{"voxel_size must be three positive finite numbers (world units per voxel), or absent"};
-    if (j.contains("cut")) read_cut(j.at("cut"), s.cut);
     if (j.contains("camera")) {
       const json& c = j.at("camera");
       s.has_camera = true;

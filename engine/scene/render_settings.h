@@ -61,6 +61,20 @@ struct GradientOpacity {  // opacity *= ramp(|grad|) with |grad| in window units
   bool operator==(const GradientOpacity&) const = default;
 };
 
+// Clipping in volume fractions (0..1 along each axis of the whole volume, so
+// the same numbers mean the same cut at any size or pyramid level): a plane
+// keeping the points f with dot(cut_normal, f) + cut_offset >= 0, and a box
+// keeping [roi_lo, roi_hi]. The out-of-core renderer's LodSettings cut/roi
+// take them in level-0 voxels (render/lod/lod_traversal.h clip_for_volume).
+struct ClipSettings {
+  bool cut = false;
+  std::array<double, 3> cut_normal{0, 0, 1};
+  double cut_offset = 0.0;
+  bool roi = false;
+  std::array<double, 3> roi_lo{0, 0, 0}, roi_hi{1, 1, 1};
+  bool operator==(const ClipSettings&) const = default;
+};
+
 struct RenderSettings {
   OpticalModel model = OpticalModel::kEmissionAbsorption;
   std::vector<ChannelSettings> channels{ChannelSettings{}};  // one per volume channel (up to 4)
@@ -90,6 +104,7 @@ struct RenderSettings {
   DepthColorMode depth_color = DepthColorMode::kOff;  // colour by depth through each channel's colour map
   GradientOpacity gradient_opacity;
   uint32_t max_steps = 1u << 16;
+  ClipSettings clip;  // JSON "clip" (written only when a plane or box is on)
   bool operator==(const RenderSettings&) const = default;
 };
 
@@ -113,17 +128,6 @@ struct VolumeTransform {
   bool operator==(const VolumeTransform&) const = default;
 };
 
-// A plane clipping the volume (the headset's cut tool; the renderer's
-// LodSettings::cut): points p in level-0 voxel coordinates with
-// dot(normal, p) + offset >= 0 are drawn, the rest is cut away. Voxel
-// coordinates, so the plane moves with the volume's transform.
-struct CutPlaneState {
-  bool enabled = false;
-  std::array<double, 3> normal{0, 0, 1};  // not necessarily of unit length
-  double offset = 0.0;
-  bool operator==(const CutPlaneState&) const = default;
-};
-
 // What a card stores: everything `vxr render --card` needs to draw the same
 // picture again. Fields left at their defaults mean "the viewer's choice".
 struct Scene {
@@ -141,7 +145,6 @@ struct Scene {
   RenderSettings render;
   // World units per voxel replacing the input's own (--voxel-size); all 0: the input's.
   std::array<double, 3> voxel_size{0, 0, 0};
-  CutPlaneState cut;  // JSON "cut": {"normal", "offset"} when enabled; absent (older files): no cut
   bool operator==(const Scene&) const = default;
 };
 

@@ -62,6 +62,10 @@ Status init_glfw() {
 DesktopTarget* self(GLFWwindow* w) { return static_cast<DesktopTarget*>(glfwGetWindowUserPointer(w)); }
 
 double g_last_x = 0, g_last_y = 0;
+// While the view moves, voxels twice as large per pixel (one pyramid level coarser: an eighth of the bricks
+// to stream, half the samples along each ray), so the picture follows the mouse on large data; the first
+// still frame is drawn at full detail again.
+constexpr double kMovingLodBias = 1.0;
 constexpr uint32_t kPrefetchAhead = 4;  // timepoints decoded ahead of the shown one (MoviePlayerOptions::prefetch)
 
 }  // namespace
@@ -136,6 +140,7 @@ DesktopTarget::DesktopTarget(const DesktopOptions& o) : o_(o) {
       const Status s = state_->restore(state_->render(), state_->scene().timepoint, *o_.viewer->start_orbit);
       if (!s) log_warn("viewer: the card's camera: " + s.message());
     }
+    if (o_.viewer->restore_view) restore_remembered_view();
     if (o_.viewer->script)
       script_ = std::make_unique<UiScriptRunner>(*o_.viewer->script, tools_.get(),
                                                  [this](const ViewerState&) { return card_scene(); });
@@ -155,11 +160,14 @@ void DesktopTarget::on_viewer_cursor(double dx, double dy) {
     if (const auto v = voxel_under(x, y))
       if (Status s = tools_->measure_hover(*v, state_->scene().timepoint); !s) panel_->message = s.message();
   }
-  if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS)
+  if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
     state_->orbit_drag(dx, dy);
-  else if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
-           glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS)
+    state_->note_motion();
+  } else if (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
+             glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS) {
     state_->pan_drag(dx, dy, double(o_.height));
+    state_->note_motion();
+  }
 }
 
 DesktopTarget::~DesktopTarget() {
@@ -191,7 +199,10 @@ void DesktopTarget::on_drag(double dx, double dy) {
 
 void DesktopTarget::on_scroll(double dy) {
   if (state_) {
-    if (!ImGuiLayer::wants_mouse()) state_->zoom(dy);
+    if (!ImGuiLayer::wants_mouse()) {
+      state_->zoom(dy);
+      state_->note_motion();
+    }
     return;
   }
   distance_ = std::clamp(distance_ * std::pow(0.9, dy), 0.02, 50.0);
@@ -341,7 +352,33 @@ Status DesktopTarget::recreate_swapchain() {
   return Status::ok();
 }
 
+void DesktopTarget::restore_remembered_view() {
+  const std::string& path = o_.viewer->view_memory;
+  if (path.empty()) return;
+  auto remembered = load_remembered_view(path);
+  if (!remembered) {
+    log_warn("viewer: " + remembered.status().message() + ": ignored");
+    return;
+  }
+  if (!*remembered) return;  // the first time this dataset opens
+  const Scene& scene = **remembered;
+  if (scene.volume != o_.viewer->scene.volume || scene.channels != o_.viewer->scene.channels) {
+    log_warn("viewer: " + path + ": remembers another input or other channels (" + scene.volume + "): ignored");
+    return;
+  }
+  const OrbitCamera orbit = scene_orbit(scene, o_.viewer->placement).value_or(state_->orbit());
+  if (Status s = state_->restore(scene.render, scene.timepoint, orbit); !s)
+    log_warn("viewer: " + path + ": " + s.message() + ": ignored");
+}
+
+void DesktopTarget::remember_view() {
+  if (!state_ || o_.viewer->view_memory.empty()) return;
+  if (Status s = save_remembered_view(o_.viewer->view_memory, card_scene()); !s)
+    log_warn("viewer: view not remembered: " + s.message());
+}
+
 void DesktopTarget::detach() {
+  if (ctx_) remember_view();  // once per session the window drew, before its size is forgotten
   if (state_ && user_resized_) {
     // The next viewer opens at the size the user left this one.
     const std::string config = viewer_config_path();
@@ -679,6 +716,12 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
                  return std::all_of(prefetch_.begin(), prefetch_.end(),
                                     [t](const TimepointPrefetcher& p) { return p.ready(t); });
                });
+  // Held W/S/A/D/Q/E fly over this frame's time (not while a panel's text field has the keyboard).
+  const FlyInput held = held_fly_keys([this](int key) { return glfwGetKey(window_, key) == GLFW_PRESS; });
+  if (held.any() && !ImGuiLayer::wants_keyboard()) {
+    state_->fly_for(held, frame_ms_ / 1000.0);
+    state_->note_motion();
+  }
   bool script_card = false;  // the script pressed the tools panel's buttons
   std::optional<uint64_t> script_restore;
   if (script_ && !export_) {  // a movie being exported holds the script until it is written
@@ -761,6 +804,8 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   }
   f.settings = drawn_settings_;
   f.timepoint = state_->scene().timepoint;
+  // Coarse while the user moves the view, full detail once it is still (progressive refinement).
+  f.lod_bias_offset = state_->moving() ? kMovingLodBias : 0.0;
   drawn_timepoint_ = f.timepoint;
   f.should_render = true;
   f.display_time_ns = int64_t(frame_) * 16666667;

@@ -140,6 +140,9 @@ class DesktopTarget : public FrameTarget {
   Status start_movie_export(const MovieRequest& request);
   Status write_movie_frame();
   Scene card_scene() const;
+  // The remembered view of this dataset (ViewerSetup::view_memory): shown at start, written at close.
+  void restore_remembered_view();
+  void remember_view();
   Status save_panel_card(const std::string& png_path);
   Status restore_card(uint64_t id);
 

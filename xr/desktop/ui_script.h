@@ -4,7 +4,14 @@
 //
 //   any viewer command        "colormap 0 viridis", "window 0 10 200", "visible 1 off",
 //                             "model mip", "step 0.5", "time 2", "orbit 40 0", "zoom 2",
-//                             "reset", "view 3", "play", "pause", "speed 0.5", "loop on"
+//                             "reset", "view 3", "play", "pause", "speed 0.5", "loop on",
+//                             "opacity 0 0:0,0.5:0.2,1:1" (the opacity curve over the window,
+//                             x:opacity pairs, x rising in 0..1), "opacity 0 ramp" (no points),
+//                             "cut z 0.5" (keep z >= half the volume; -x/-y/-z keep the other
+//                             side), "cut 1 1 0 -0.8" (keep dot(n/|n|, f) - 0.8 >= 0), "cut off",
+//                             "cut on", "clip 0.1 0.1 0 0.9 0.9 1" (keep that box, volume
+//                             fractions), "clip off", "fly 0.2 0 0" (the orbit centre travels
+//                             forward/right/up by volume lengths)
 //                             (ViewerState::apply_command)
 //   ui on|off                 show or hide the panels
 //   wait N                    render N more frames first

@@ -32,4 +32,9 @@ std::optional<ViewerKey> viewer_key_from_glfw(int key, int action) {
   }
 }
 
+FlyInput held_fly_keys(const std::function<bool(int)>& pressed) {
+  auto axis = [&](int plus, int minus) { return (pressed(plus) ? 1.0 : 0.0) - (pressed(minus) ? 1.0 : 0.0); };
+  return {axis(GLFW_KEY_W, GLFW_KEY_S), axis(GLFW_KEY_D, GLFW_KEY_A), axis(GLFW_KEY_E, GLFW_KEY_Q)};
+}
+
 }  // namespace vxr::xr

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cfloat>
+#include <cmath>
 #include <cstdio>
 
 #include "render/colormap.h"
@@ -14,6 +15,69 @@ namespace {
 constexpr const char* kModelLabels[] = {"emission-absorption", "emission", "MIP", "MinIP", "average", "isosurface"};
 constexpr OpticalModel kModelOrder[] = {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
                                         OpticalModel::kMinIp, OpticalModel::kAverage, OpticalModel::kIsosurface};
+
+// Pixels within which a click or right click takes an opacity point.
+constexpr float kHandleRadius = 6.0f;
+
+// The histogram of the channel's data across the whole canvas (bins over the data range), grey.
+void histogram_bars(ImDrawList* draw, ImVec2 p0, ImVec2 size, const std::vector<float>& bins) {
+  const float top = *std::max_element(bins.begin(), bins.end());
+  if (!(top > 0)) return;
+  const float w = size.x / float(bins.size());
+  for (size_t i = 0; i < bins.size(); ++i) {
+    const float h = size.y * bins[i] / top;
+    draw->AddRectFilled(ImVec2(p0.x + w * float(i), p0.y + size.y - h), ImVec2(p0.x + w * float(i + 1), p0.y + size.y),
+                        IM_COL32(90, 90, 90, 255));
+  }
+}
+
+}  // namespace
+
+void draw_opacity_editor(ViewerState& state, size_t c, const std::vector<float>* histogram) {
+  const ImVec2 p0 = ImGui::GetCursorScreenPos();
+  const ImVec2 size(std::max(64.0f, ImGui::GetContentRegionAvail().x), 72.0f);
+  ImGui::InvisibleButton("##opacity", size, ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight);
+  ImDrawList* draw = ImGui::GetWindowDrawList();
+  draw->AddRectFilled(p0, ImVec2(p0.x + size.x, p0.y + size.y), IM_COL32(25, 25, 25, 255));
+  if (histogram && !histogram->empty()) histogram_bars(draw, p0, size, *histogram);
+  const std::vector<OpacityPoint> points = state.opacity_curve(c);
+  auto at = [&](double x, double a) { return ImVec2(p0.x + float(x) * size.x, p0.y + (1.0f - float(a)) * size.y); };
+  std::vector<ImVec2> line{at(0.0, points.front().opacity)};
+  for (const OpacityPoint& p : points) line.push_back(at(p.x, p.opacity));
+  line.push_back(at(1.0, points.back().opacity));
+  draw->AddPolyline(line.data(), int(line.size()), IM_COL32(255, 200, 0, 255), 0, 2.0f);
+  const ImVec2 mouse = ImGui::GetIO().MousePos;
+  int hovered = -1;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const ImVec2 h = at(points[i].x, points[i].opacity);
+    if (std::hypot(mouse.x - h.x, mouse.y - h.y) <= kHandleRadius) hovered = int(i);
+    draw->AddCircleFilled(h, 4.0f, IM_COL32(255, 255, 255, 255));
+  }
+  const double x = std::clamp(double((mouse.x - p0.x) / size.x), 0.0, 1.0);
+  const double a = std::clamp(double(1.0f - (mouse.y - p0.y) / size.y), 0.0, 1.0);
+  // The point being dragged lives in ImGui's storage: it survives frames, one per channel.
+  ImGuiStorage* storage = ImGui::GetStateStorage();
+  const ImGuiID key = ImGui::GetID("##opacity-dragged");
+  int dragged = storage->GetInt(key, -1);
+  if (ImGui::IsItemActivated() && ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+    if (hovered >= 0) {
+      dragged = hovered;
+    } else if (auto added = state.add_opacity_point(c, x, a)) {
+      dragged = int(*added);
+    }
+  }
+  if (ImGui::IsItemActive() && dragged >= 0 && ImGui::IsMouseDown(ImGuiMouseButton_Left))
+    (void)state.move_opacity_point(c, size_t(dragged), x, a);
+  if (!ImGui::IsItemActive()) dragged = -1;
+  if (hovered >= 0 && ImGui::IsItemHovered() && ImGui::IsMouseClicked(ImGuiMouseButton_Right))
+    (void)state.remove_opacity_point(c, size_t(hovered));
+  storage->SetInt(key, dragged);
+  if (ImGui::SmallButton("ramp")) (void)state.set_opacity_points(c, {});
+  ImGui::SameLine();
+  ImGui::TextDisabled("opacity: drag, click adds, right click removes");
+}
+
+namespace {
 
 void channel_panel(ViewerState& state, const PanelInputs& in) {
   const std::vector<std::string> maps = colormap_names();
@@ -39,9 +103,59 @@ void channel_panel(ViewerState& state, const PanelInputs& in) {
     float gamma = static_cast<float>(ch.gamma);
     if (ImGui::SliderFloat("gamma", &gamma, 0.1f, 5.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
       (void)state.set_gamma(c, gamma);
+    draw_opacity_editor(state, c, c < in.histograms.size() ? &in.histograms[c] : nullptr);
     ImGui::PopID();
     ImGui::Separator();
   }
+}
+
+// Which way a cut's normal points when it lies along an axis: 0..2 = +x +y +z, 3..5 = -x -y -z; -1: oblique.
+int cut_axis_choice(const ClipSettings& c) {
+  for (int a = 0; a < 3; ++a)
+    if (std::abs(c.cut_normal[a]) == 1.0) return c.cut_normal[a] > 0 ? a : a + 3;
+  return -1;
+}
+
+}  // namespace
+
+void draw_clip_controls(ViewerState& state) {
+  const ClipSettings& c = state.render().clip;
+  bool cut = c.cut;
+  if (ImGui::Checkbox("cut plane", &cut)) state.set_cut_enabled(cut);
+  static const char* const kSides[] = {"keep +x", "keep +y", "keep +z", "keep -x", "keep -y", "keep -z", "oblique"};
+  const int axis = cut_axis_choice(c);
+  // Along an axis the slider is the plane's coordinate on it: offset -p keeps f >= p, offset p keeps f <= p.
+  float position = axis < 0 ? 0.5f : float(axis < 3 ? -c.cut_offset : c.cut_offset);
+  int choice = axis < 0 ? 6 : axis;
+  if (ImGui::Combo("side", &choice, kSides, axis < 0 ? 7 : 6) && choice < 6)
+    (void)state.set_cut_axis(choice % 3, choice < 3, std::clamp(position, 0.0f, 1.0f));
+  if (axis >= 0) {
+    if (ImGui::SliderFloat("position", &position, 0.0f, 1.0f, "%.3f")) (void)state.set_cut_axis(axis % 3, axis < 3, position);
+  } else {
+    float n[3] = {float(c.cut_normal[0]), float(c.cut_normal[1]), float(c.cut_normal[2])};
+    float offset = float(c.cut_offset);
+    const bool normal_edited = ImGui::InputFloat3("normal", n, "%.3f", ImGuiInputTextFlags_EnterReturnsTrue);
+    const bool offset_edited = ImGui::SliderFloat("offset", &offset, -1.8f, 1.8f, "%.3f");
+    if (normal_edited || offset_edited) (void)state.set_cut_plane({n[0], n[1], n[2]}, offset);
+  }
+  bool roi = c.roi;
+  if (ImGui::Checkbox("clip box", &roi)) state.set_roi_enabled(roi);
+  static const char* const kAxes[] = {"x range", "y range", "z range"};
+  for (int a = 0; a < 3; ++a) {
+    float lo = float(c.roi_lo[a]), hi = float(c.roi_hi[a]);
+    if (ImGui::DragFloatRange2(kAxes[a], &lo, &hi, 0.002f, 0.0f, 1.0f, "%.3f")) {
+      std::array<double, 3> new_lo = c.roi_lo, new_hi = c.roi_hi;
+      new_lo[a] = lo;
+      new_hi[a] = hi;
+      (void)state.set_roi(new_lo, new_hi);  // refused (lo >= hi): the box stays
+    }
+  }
+}
+
+namespace {
+
+void clip_panel(ViewerState& state) {
+  if (ImGui::CollapsingHeader("clipping")) draw_clip_controls(state);  // closed at first: the panel stays short
 }
 
 void render_panel(ViewerState& state) {
@@ -55,6 +169,7 @@ void render_panel(ViewerState& state) {
   float density = static_cast<float>(state.render().density);
   if (ImGui::SliderFloat("density", &density, 0.001f, 10.0f, "%.3f", ImGuiSliderFlags_Logarithmic))
     (void)state.set_density(density);
+  clip_panel(state);
   if (state.timepoints() > 1) {
     int t = static_cast<int>(state.scene().timepoint);
     if (ImGui::SliderInt("time", &t, 0, static_cast<int>(state.timepoints()) - 1))

@@ -19,6 +19,19 @@ struct PanelInputs {
   double frame_ms = 0.0;
 };
 
+// Channel `channel`'s opacity curve editor at the cursor (the channel panel
+// draws one per channel): the curve over the window (x 0..1 = window lo..hi,
+// opacity 0..1 bottom to top) over `histogram` (may be null); drag a point to
+// move it, click elsewhere to add one, right-click a point to remove it,
+// "ramp" to drop every point. The canvas is the full width available, 72 px tall.
+void draw_opacity_editor(ViewerState& state, size_t channel, const std::vector<float>* histogram);
+
+// The rendering panel's clipping controls at the cursor: "cut plane" on/off,
+// the side kept along an axis and the plane's position on it (or, for an
+// oblique plane, its normal and offset), "clip box" on/off and a range per
+// axis, all in fractions of the volume. Editing a plane or range turns it on.
+void draw_clip_controls(ViewerState& state);
+
 // Draws the panels into the current ImGui frame (between NewFrame and Render)
 // and applies the user's edits to `state`. Hidden panels (Tab) draw nothing.
 void draw_viewer_panels(ViewerState& state, const PanelInputs& in);

@@ -29,6 +29,12 @@ struct ViewerSetup {
   std::shared_ptr<annotate::AnnotationStore> store;  // tools, cards, the marker overlay (may be null)
   std::vector<std::vector<float>> histograms;        // per channel, bins over data_range (panels)
   std::optional<OrbitCamera> start_orbit;            // `--card`: the window starts at the card's camera
+  // Per-dataset memory (viewer_state.h remembered_view_path(input)): the window
+  // writes its Scene there when it closes. Empty (the default): nothing written.
+  std::string view_memory;
+  // Start from the Scene found at view_memory (settings, timepoint, camera).
+  // `vxr view` sets it when no --settings, --card or look flags were given.
+  bool restore_view = false;
 };
 
 // The orbit that shows `scene`'s camera: the camera moved into the volume's

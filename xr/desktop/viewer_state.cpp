@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "core/output_file.h"
@@ -68,7 +70,9 @@ OrbitCamera orbit_for_camera(const CameraState& c, double unit) {
 const std::vector<ShortcutHelp>& viewer_shortcuts() {
   static const std::vector<ShortcutHelp> table = {
       {"Left drag", "orbit"},           {"Right / middle drag", "pan"},
-      {"Wheel", "zoom"},                {"R", "reset view"},
+      {"Wheel", "zoom"},                {"W / S", "fly forward / back (the orbit centre travels along the view)"},
+      {"A / D", "fly left / right"},    {"Q / E", "fly down / up"},
+      {"R", "reset view"},
       {"1 / 2 / 3", "view along x / y / z"}, {"M", "next optical model"},
       {"C", "next colour map (channel 0)"},  {"Left / Right", "previous / next timepoint"},
       {"Space", "play / pause the timepoints"}, {", / .", "step one timepoint back / on (pauses)"},
@@ -163,6 +167,179 @@ Status ViewerState::set_gamma(size_t channel, double gamma) {
   return Status::ok();
 }
 
+namespace {
+
+Status check_opacity_points(const std::vector<OpacityPoint>& points) {
+  double last = -1.0;
+  for (const OpacityPoint& p : points) {
+    if (!(p.x >= 0.0 && p.x <= 1.0) || p.x < last)
+      return invalid_argument("opacity points need x rising within 0..1 (got " + std::to_string(p.x) + ")");
+    if (!(p.opacity >= 0.0 && p.opacity <= 1.0))
+      return invalid_argument("opacity must be in 0..1 (got " + std::to_string(p.opacity) + ")");
+    last = p.x;
+  }
+  return Status::ok();
+}
+
+// "0:0,0.5:0.2,1:1" -> points; nullopt when malformed.
+std::optional<std::vector<OpacityPoint>> parse_opacity_points(const std::string& text) {
+  std::vector<OpacityPoint> points;
+  std::istringstream in(text);
+  for (std::string pair; std::getline(in, pair, ',');) {
+    const size_t colon = pair.find(':');
+    OpacityPoint p;
+    if (colon == std::string::npos || !parse_double(pair.substr(0, colon), &p.x) ||
+        !parse_double(pair.substr(colon + 1), &p.opacity))
+      return std::nullopt;
+    points.push_back(p);
+  }
+  if (points.empty()) return std::nullopt;
+  return points;
+}
+
+}  // namespace
+
+Status ViewerState::set_opacity_points(size_t channel, std::vector<OpacityPoint> points) {
+  VXR_RETURN_IF_ERROR(check_channel(channel));
+  VXR_RETURN_IF_ERROR(check_opacity_points(points));
+  auto& ch = scene_.render.channels[channel];
+  if (ch.opacity_points != points) {
+    ch.opacity_points = std::move(points);
+    changed();
+  }
+  return Status::ok();
+}
+
+std::vector<OpacityPoint> ViewerState::opacity_curve(size_t channel) const {
+  if (channel >= scene_.render.channels.size()) return {};
+  const auto& points = scene_.render.channels[channel].opacity_points;
+  // No points: opacity equals the windowed value (transfer_function.cpp), the ramp.
+  return points.empty() ? std::vector<OpacityPoint>{{0.0, 0.0}, {1.0, 1.0}} : points;
+}
+
+Result<size_t> ViewerState::add_opacity_point(size_t channel, double x, double opacity) {
+  VXR_RETURN_IF_ERROR(check_channel(channel));
+  std::vector<OpacityPoint> points = opacity_curve(channel);
+  const auto at = std::upper_bound(points.begin(), points.end(), x,
+                                   [](double v, const OpacityPoint& p) { return v < p.x; });
+  const size_t index = size_t(at - points.begin());
+  points.insert(at, OpacityPoint{x, opacity});
+  VXR_RETURN_IF_ERROR(set_opacity_points(channel, std::move(points)));
+  return index;
+}
+
+Status ViewerState::move_opacity_point(size_t channel, size_t index, double x, double opacity) {
+  VXR_RETURN_IF_ERROR(check_channel(channel));
+  std::vector<OpacityPoint> points = opacity_curve(channel);
+  if (index >= points.size())
+    return out_of_range("opacity point " + std::to_string(index) + " does not exist (" +
+                        std::to_string(points.size()) + " points)");
+  // A dragged point stops at its neighbours: the order, and so the indices, stay.
+  const double lo = index > 0 ? points[index - 1].x : 0.0;
+  const double hi = index + 1 < points.size() ? points[index + 1].x : 1.0;
+  points[index] = {std::clamp(x, lo, hi), std::clamp(opacity, 0.0, 1.0)};
+  return set_opacity_points(channel, std::move(points));
+}
+
+Status ViewerState::remove_opacity_point(size_t channel, size_t index) {
+  VXR_RETURN_IF_ERROR(check_channel(channel));
+  std::vector<OpacityPoint> points = opacity_curve(channel);
+  if (index >= points.size())
+    return out_of_range("opacity point " + std::to_string(index) + " does not exist (" +
+                        std::to_string(points.size()) + " points)");
+  if (points.size() <= 2) return invalid_argument("an opacity curve keeps at least two points");
+  points.erase(points.begin() + std::ptrdiff_t(index));
+  return set_opacity_points(channel, std::move(points));
+}
+
+Status ViewerState::set_cut_axis(int axis, bool keep_above, double position) {
+  if (axis < 0 || axis > 2) return invalid_argument("cut axis must be x, y or z");
+  if (!(position >= 0.0 && position <= 1.0)) return out_of_range("cut position must be in 0..1");
+  std::array<double, 3> n{0, 0, 0};
+  n[size_t(axis)] = keep_above ? 1.0 : -1.0;
+  // Keeps n * f + offset >= 0: f >= position above, f <= position below.
+  return set_cut_plane(n, keep_above ? -position : position);
+}
+
+Status ViewerState::set_cut_plane(std::array<double, 3> normal, double offset) {
+  const double len = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+  if (!(len > 0) || !std::isfinite(len) || !std::isfinite(offset))
+    return invalid_argument("a cut plane needs a non-zero normal and a finite offset");
+  ClipSettings& c = scene_.render.clip;
+  for (double& v : normal) v /= len;
+  if (!c.cut || c.cut_normal != normal || c.cut_offset != offset) {
+    c.cut = true;
+    c.cut_normal = normal;
+    c.cut_offset = offset;
+    changed();
+  }
+  return Status::ok();
+}
+
+void ViewerState::set_cut_enabled(bool on) {
+  if (scene_.render.clip.cut != on) {
+    scene_.render.clip.cut = on;
+    changed();
+  }
+}
+
+Status ViewerState::set_roi(std::array<double, 3> lo, std::array<double, 3> hi) {
+  for (int a = 0; a < 3; ++a)
+    if (!(lo[a] >= 0.0 && hi[a] <= 1.0 && lo[a] < hi[a]))
+      return invalid_argument("the clip box needs 0 <= lo < hi <= 1 along each axis");
+  ClipSettings& c = scene_.render.clip;
+  if (!c.roi || c.roi_lo != lo || c.roi_hi != hi) {
+    c.roi = true;
+    c.roi_lo = lo;
+    c.roi_hi = hi;
+    changed();
+  }
+  return Status::ok();
+}
+
+void ViewerState::set_roi_enabled(bool on) {
+  if (scene_.render.clip.roi != on) {
+    scene_.render.clip.roi = on;
+    changed();
+  }
+}
+
+// "cut off|on", "cut x|y|z|-x|-y|-z POS", "cut NX NY NZ OFFSET", "clip off|on", "clip X0 Y0 Z0 X1 Y1 Z1".
+Status ViewerState::apply_clip_command(const std::vector<std::string>& w, const std::string& line) {
+  auto bad = [&](const std::string& why) { return invalid_argument("'" + line + "': " + why); };
+  auto wrap = [&](Status s) { return s.is_ok() ? s : bad(s.message()); };
+  std::vector<double> v;
+  for (size_t i = 1; i < w.size(); ++i) {
+    double d = 0;
+    if (!parse_double(w[i], &d)) break;
+    v.push_back(d);
+  }
+  if (w[0] == "cut") {
+    const char* usage = "usage: cut off|on, cut x|y|z|-x|-y|-z POSITION (0..1), or cut NX NY NZ OFFSET";
+    if (w.size() == 2 && (w[1] == "off" || w[1] == "on")) {
+      set_cut_enabled(w[1] == "on");
+      return Status::ok();
+    }
+    if (w.size() == 3 && v.empty()) {
+      static const std::string axes[] = {"x", "y", "z", "-x", "-y", "-z"};
+      const auto* a = std::find(std::begin(axes), std::end(axes), w[1]);
+      double position = 0;
+      if (a == std::end(axes) || !parse_double(w[2], &position)) return bad(usage);
+      const int index = int(a - std::begin(axes));
+      return wrap(set_cut_axis(index % 3, index < 3, position));
+    }
+    if (w.size() == 5 && v.size() == 4) return wrap(set_cut_plane({v[0], v[1], v[2]}, v[3]));
+    return bad(usage);
+  }
+  const char* usage = "usage: clip off|on, or clip X0 Y0 Z0 X1 Y1 Z1 (volume fractions)";
+  if (w.size() == 2 && (w[1] == "off" || w[1] == "on")) {
+    set_roi_enabled(w[1] == "on");
+    return Status::ok();
+  }
+  if (w.size() == 7 && v.size() == 6) return wrap(set_roi({v[0], v[1], v[2]}, {v[3], v[4], v[5]}));
+  return bad(usage);
+}
+
 void ViewerState::set_model(OpticalModel model) {
   if (scene_.render.model != model) {
     scene_.render.model = model;
@@ -210,8 +387,19 @@ Status ViewerState::set_timepoint(uint32_t t) {
   return Status::ok();
 }
 
+void ViewerState::note_motion() {
+  moved_ = true;
+  motion_tick_ = ticks_;
+  motion_s_ = now_s_;
+}
+
+bool ViewerState::moving() const {
+  return moved_ && (ticks_ - motion_tick_ < kStillFrames || now_s_ - motion_s_ < kStillSeconds);
+}
+
 void ViewerState::tick(double now_s, const std::function<bool(uint32_t)>& ready) {
   now_s_ = now_s;
+  ++ticks_;
   if (!clock_.playing()) return;
   const PlaybackFrame f = clock_.tick(now_s, ready);
   if (f.timepoint != scene_.timepoint) {
@@ -263,6 +451,22 @@ void ViewerState::pan_drag(double dx_px, double dy_px, double view_height_px) {
 void ViewerState::zoom(double wheel_ticks) {
   orbit_.distance = std::clamp(orbit_.distance * std::pow(kZoomPerTick, wheel_ticks), 0.01, 100.0);
   changed();
+}
+
+void ViewerState::fly(const FlyInput& d, double amount) {
+  if (!d.any() || !(amount > 0) || !std::isfinite(amount)) return;
+  const CameraState c = orbit_.camera();
+  std::array<double, 3> fwd, right;
+  for (int i = 0; i < 3; ++i) fwd[i] = (c.target[i] - c.eye[i]) / orbit_.distance;
+  right = {fwd[1] * c.up[2] - fwd[2] * c.up[1], fwd[2] * c.up[0] - fwd[0] * c.up[2],
+           fwd[0] * c.up[1] - fwd[1] * c.up[0]};
+  // The focus moves and the eye with it: the view turns nowhere, it travels.
+  for (int i = 0; i < 3; ++i) orbit_.focus[i] += amount * (d.forward * fwd[i] + d.right * right[i] + d.up * c.up[i]);
+  changed();
+}
+
+void ViewerState::fly_for(const FlyInput& held, double seconds) {
+  fly(held, 0.5 * orbit_.distance * std::clamp(seconds, 0.0, 0.1));  // a stalled frame is not a jump
 }
 
 void ViewerState::reset_view() {
@@ -355,6 +559,22 @@ Status ViewerState::apply_command(const std::string& line) {
     if (!need(2) || !parse_index(w[1], &ch) || !parse_double(w[2], &a)) return bad("usage: gamma CH G");
     return wrap(set_gamma(ch, a));
   }
+  if (cmd == "opacity") {
+    if (!need(2) || !parse_index(w[1], &ch)) return bad("usage: opacity CH X:A,X:A,... (x rising in 0..1) or opacity CH ramp");
+    if (w[2] == "ramp") return wrap(set_opacity_points(ch, {}));
+    const auto points = parse_opacity_points(w[2]);
+    if (!points) return bad("usage: opacity CH X:A,X:A,... (x rising in 0..1) or opacity CH ramp");
+    return wrap(set_opacity_points(ch, *points));
+  }
+  if (cmd == "cut" || cmd == "clip") return apply_clip_command(w, line);
+  if (cmd == "fly") {
+    double c = 0;
+    if (!need(3) || !parse_double(w[1], &a) || !parse_double(w[2], &b) || !parse_double(w[3], &c))
+      return bad("usage: fly FORWARD RIGHT UP (volume lengths)");
+    const double len = std::sqrt(a * a + b * b + c * c);
+    if (len > 0) fly({a / len, b / len, c / len}, len);
+    return Status::ok();
+  }
   if (cmd == "model") {
     OpticalModel m;
     if (!need(1) || !optical_model_from_name(w[1], &m)) return bad("usage: model ea|emission|mip|minip|average|iso");
@@ -439,6 +659,41 @@ Result<WindowGeometry> load_window_geometry(const std::string& path) {
     (std::string(key) == "width" ? g.width : g.height) = j[key].get<uint32_t>();
   }
   return g;
+}
+
+std::string remembered_view_path(const std::string& input) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  // A project keeps its view inside it, so it travels with the project.
+  for (fs::path p = fs::absolute(input, ec); !ec && !p.empty(); p = p.parent_path()) {
+    if (p.extension() == ".vxr" && fs::is_regular_file(p / "project.json", ec)) return (p / "viewer.json").string();
+    if (p == p.parent_path()) break;
+  }
+  const std::string config = viewer_config_path();
+  if (config.empty()) return {};
+  uint64_t h = 1469598103934665603ull;  // FNV-1a 64 of the input's absolute path (or name, procedural:...)
+  const std::string key = input.rfind("procedural:", 0) == 0 || input.empty() ? input : fs::absolute(input, ec).string();
+  for (unsigned char c : key) h = (h ^ c) * 1099511628211ull;
+  char name[32];
+  std::snprintf(name, sizeof name, "%016llx.json", static_cast<unsigned long long>(h));
+  return (fs::path(config).parent_path() / "views" / name).string();
+}
+
+Status save_remembered_view(const std::string& path, const Scene& scene) {
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
+  if (ec) return io_error(path + ": " + ec.message());
+  return write_file_atomically(path, scene_to_json(scene) + "\n");
+}
+
+Result<std::optional<Scene>> load_remembered_view(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::optional<Scene>();  // nothing remembered yet
+  std::stringstream text;
+  text << in.rdbuf();
+  auto scene = scene_from_json(text.str());
+  if (!scene) return invalid_argument(path + ": not a remembered view (" + scene.status().message() + ")");
+  return std::optional<Scene>(std::move(scene).value());
 }
 
 Status save_window_geometry(const std::string& path, const WindowGeometry& g) {

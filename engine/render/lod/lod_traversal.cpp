@@ -201,12 +201,6 @@ class Traversal {
 
 }  // namespace
 
-CutPlane cut_plane_of(const CutPlaneState& s) {
-  return {s.enabled, glm::dvec3(s.normal[0], s.normal[1], s.normal[2]), s.offset};
-}
-
-CutPlaneState cut_plane_state(const CutPlane& c) { return {c.enabled, {c.normal.x, c.normal.y, c.normal.z}, c.offset}; }
-
 BrickBox chunk_box(const ChunkSource& src, const ChunkKey& key) {
   const auto& li = src.levels()[key.level];
   const std::array<uint32_t, 3> c{key.x, key.y, key.z};

@@ -19,7 +19,6 @@
 #include <glm/glm.hpp>
 #include <vector>
 
-#include "scene/render_settings.h"
 #include "volume/chunk_source.h"
 
 namespace vxr {
@@ -31,10 +30,6 @@ struct CutPlane {
   glm::dvec3 normal{0, 0, 1};
   double offset = 0.0;
 };
-
-// A card's plane (Scene::cut) as the renderer's, and back; exact.
-CutPlane cut_plane_of(const CutPlaneState& s);
-CutPlaneState cut_plane_state(const CutPlane& c);
 
 // A box that clips the volume: only [lo, hi] (level-0 voxel coordinates) is kept.
 struct RoiBox {
