@@ -315,13 +315,7 @@ int run(const Options& given) {
   Resolved resolved;
   // The camera: the default orbit view, then the scene's, then the flags.
   const CameraChooser camera_for = [&](const VolumePlacement& placement, bool flat) -> Result<Camera> {
-    Camera camera = flat ? orbit_camera(placement, 0.0, 90.0 - 1e-3, 1.1) : orbit_camera(placement, 30.0, 25.0, 1.25);
-    if (scene.has_camera) {
-      camera.eye = {scene.camera.eye[0], scene.camera.eye[1], scene.camera.eye[2]};
-      camera.target = {scene.camera.target[0], scene.camera.target[1], scene.camera.target[2]};
-      camera.up = {scene.camera.up[0], scene.camera.up[1], scene.camera.up[2]};
-      camera.fov_y_deg = scene.camera.fov_y_deg;
-    }
+    Camera camera = scene_world_camera(scene, placement, flat);
     if (!o.camera.empty()) {
       std::vector<double> c;
       if (!parse_doubles(o.camera, 9, c))

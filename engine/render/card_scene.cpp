@@ -33,7 +33,7 @@ Result<Scene> load_card_scene(const std::string& spec, const std::string& annota
   return scene;
 }
 
-Camera scene_camera(const Scene& sc, const VolumePlacement& placement, bool flat) {
+Camera scene_world_camera(const Scene& sc, const VolumePlacement& placement, bool flat) {
   Camera camera = flat ? orbit_camera(placement, 0.0, 90.0 - 1e-3, 1.1) : orbit_camera(placement, 30.0, 25.0, 1.25);
   if (sc.has_camera) {
     camera.eye = {sc.camera.eye[0], sc.camera.eye[1], sc.camera.eye[2]};
@@ -41,7 +41,11 @@ Camera scene_camera(const Scene& sc, const VolumePlacement& placement, bool flat
     camera.up = {sc.camera.up[0], sc.camera.up[1], sc.camera.up[2]};
     camera.fov_y_deg = sc.camera.fov_y_deg;
   }
-  return camera_in_volume_frame(camera, sc.transform);
+  return camera;
+}
+
+Camera scene_camera(const Scene& sc, const VolumePlacement& placement, bool flat) {
+  return camera_in_volume_frame(scene_world_camera(sc, placement, flat), sc.transform);
 }
 
 Camera camera_in_volume_frame(const Camera& world, const VolumeTransform& transform) {

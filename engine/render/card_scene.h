@@ -17,6 +17,11 @@ namespace vxr {
 Result<Scene> load_card_scene(const std::string& spec, const std::string& annotations_flag = "",
                               const std::string& input = "");
 
+// A Scene's own camera (or the default orbit view; `flat`: a single slice
+// seen from above) in the world, before its volume transform: where
+// `vxr render`'s --camera/--fov flags apply and what a card stores.
+Camera scene_world_camera(const Scene& scene, const VolumePlacement& placement, bool flat);
+
 // The camera a Scene is drawn with, in the volume frame the renderers use:
 // its own (or the default orbit view; `flat`: a single slice seen from
 // above), then its volume transform undone.
