@@ -644,6 +644,35 @@ TEST_CASE("desktop viewer: vxr view reopens a dataset at its last view unless a 
   CHECK(flagged->pixels != last->pixels);   // --colormap: the flags' look, not the memory
 }
 
+TEST_CASE("desktop viewer: the Open step closes the window and the viewer opens the new input") {
+  const std::string dir = test::xr_out_dir("desktop_ui_open");
+  const std::string script = dir + "/open.json";
+  const std::string other = std::string(VXR_TESTDATA_DIR) + "/tiff/mri-stack-calibrated.tif";  // the thresholded head
+  std::ofstream(script) << nlohmann::json::array({"ui off", "wait 2", "screenshot " + dir + "/first.png", "open " + other});
+  // The second window has no script: --frames ends it, --screenshot keeps its last frame.
+  const test::ChildResult r = test::run_child(viewer_command(script, "--frames 6 --screenshot " + dir + "/opened.png"));
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.output.find("opening " + other) != std::string::npos);
+  auto first = read_png(dir + "/first.png");
+  auto opened = read_png(dir + "/opened.png");
+  REQUIRE(first.is_ok());
+  REQUIRE(opened.is_ok());
+  CHECK(opened->width == first->width);  // the window's own choices carry over
+  CHECK(differing(*first, *opened, 0, 0, first->width, first->height) > first->width * first->height / 20);
+  CHECK(tint(*opened, 0, opened->height).pixels > 0);  // the new volume is drawn
+
+  // A step that is not last, or a missing input, is refused before any window opens.
+  for (const auto& [steps, why] : {std::pair{nlohmann::json::array({"open " + other, "wait 2"}), "the last step"},
+                                   std::pair{nlohmann::json::array({"open " + dir + "/nothing.tif"}), "does not exist"}}) {
+    std::ofstream(script) << steps.dump();
+    const test::ChildResult bad = test::run_child(viewer_command(script, ""));
+    INFO(bad.output);
+    CHECK(bad.exit_code == 2);
+    CHECK(bad.output.find(why) != std::string::npos);
+  }
+}
+
 TEST_CASE("desktop viewer: the window follows a resize and the next viewer opens at that size") {
   const std::string dir = test::xr_out_dir("desktop_ui_resize");
   const std::string config = dir + "/config";  // XDG_CONFIG_HOME of both runs: the user's own is left alone

@@ -61,7 +61,8 @@ bool is_usage_code(const Status& s) {
 // options or the work were at fault.
 class ViewCommand {
  public:
-  ViewCommand(ViewCommandOptions options, const ViewReport& report) : o_(std::move(options)), report_(report) {}
+  ViewCommand(ViewCommandOptions options, const ViewReport& report, std::shared_ptr<std::string> open_request)
+      : o_(std::move(options)), report_(report), open_request_(std::move(open_request)) {}
 
   Status run();
   ViewFailure failed() const { return failed_; }
@@ -98,6 +99,7 @@ class ViewCommand {
   TargetRequest req_;
   std::string movie_frames_;
   std::optional<TargetChoice> choice_;
+  std::shared_ptr<std::string> open_request_;  // the window's Open panel writes the next input here
 };
 
 // --card: the card's Scene is the start (settings, channels, timepoint, annotations) and its pose the headless view's.
@@ -252,6 +254,7 @@ Status ViewCommand::build_viewer_setup() {
     if (!script) return by_code(script.status());
     setup->script = std::move(script).value();
   }
+  setup->open_request = open_request_;
   // The dataset's last view comes back unless the look was asked for (a card, --settings or a look flag).
   setup->view_memory = remembered_view_path(o_.input);
   const SessionFlags& f = o_.flags;
@@ -367,10 +370,22 @@ Status ViewCommand::run() {
 }  // namespace
 
 Status run_view_command(const ViewCommandOptions& options, const ViewReport& report, ViewFailure* failure) {
-  ViewCommand command(options, report);
-  Status st = command.run();
-  if (!st && failure) *failure = command.failed();
-  return st;
+  ViewCommandOptions o = options;
+  for (;;) {
+    auto open_request = std::make_shared<std::string>();
+    ViewCommand command(o, report, open_request);
+    Status st = command.run();
+    if (!st && failure) *failure = command.failed();
+    if (!st || open_request->empty()) return st;
+    // The window's Open: the next input with the window's own choices (target,
+    // size, frames, screenshot) and the new input's defaults (its remembered view).
+    report.info("opening " + *open_request);
+    o.input = *open_request;
+    o.sample = false;
+    o.card.clear();
+    o.ui_script.clear();
+    o.flags = SessionFlags{};
+  }
 }
 
 }  // namespace vxr::xr

@@ -1,6 +1,7 @@
 #include "xr/desktop/desktop_target.h"
 
 #define GLFW_INCLUDE_VULKAN
+#include <filesystem>
 #include <GLFW/glfw3.h>
 #define GLFW_EXPOSE_NATIVE_X11
 #include <GLFW/glfw3native.h>
@@ -135,6 +136,7 @@ DesktopTarget::DesktopTarget(const DesktopOptions& o) : o_(o) {
       panel_ = std::make_unique<ToolPanel>();
     }
     movie_panel_ = std::make_unique<MoviePanel>();
+    open_panel_ = std::make_unique<OpenPanel>();
     // `vxr view --card ID`: the window starts at the card's camera.
     if (o_.viewer->start_orbit) {
       const Status s = state_->restore(state_->render(), state_->scene().timepoint, *o_.viewer->start_orbit);
@@ -641,6 +643,12 @@ Pose pose_for_camera(const CameraState& c, const VolumeTransform& t) {
 
 }  // namespace
 
+void DesktopTarget::request_open(const std::string& path) {
+  if (!o_.viewer || !o_.viewer->open_request) return;
+  *o_.viewer->open_request = path;
+  exit_requested_ = true;
+}
+
 // The script's steps due this frame, acted on as the panels' buttons and the mouse would.
 Status DesktopTarget::script_frame(FrameState& f, bool* card, std::optional<uint64_t>* restore) {
   const std::string& path = o_.viewer->script->path;
@@ -664,6 +672,7 @@ Status DesktopTarget::script_frame(FrameState& f, bool* card, std::optional<uint
     if (name == "count" || name == "track")
       std::snprintf(panel_->cls, sizeof panel_->cls, "%s", work.tool.substr(name.size() + 1).c_str());
   }
+  if (work.open) request_open(*work.open);
   if (work.panel_card) std::snprintf(panel_->card_title, sizeof panel_->card_title, "%s", work.panel_card->c_str());
   *card = work.panel_card.has_value();
   *restore = work.restore_card;
@@ -741,6 +750,16 @@ Status DesktopTarget::viewer_frame(FrameState& f) {
   in.frame_ms = frame_ms_;
   in.histograms = setup.histograms;
   draw_viewer_panels(*state_, in);
+  if (state_->ui_visible() && setup.open_request && open_panel_) {
+    draw_open_panel(*open_panel_);
+    if (open_panel_->open) {
+      std::error_code ec;
+      if (std::filesystem::exists(open_panel_->path, ec))
+        request_open(open_panel_->path);
+      else
+        open_panel_->message = std::string(open_panel_->path) + " does not exist";
+    }
+  }
   if (state_->ui_visible()) {
     movie_panel_->keyframes = keyframes_.size();
     movie_panel_->progress = export_ ? std::optional<double>(export_->progress()) : std::nullopt;

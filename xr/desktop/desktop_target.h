@@ -42,6 +42,7 @@ class UiScriptRunner;
 class ViewerTools;
 struct ToolPanel;
 struct MoviePanel;
+struct OpenPanel;
 class MovieExport;
 struct MovieRequest;
 enum class AnnotationKind;
@@ -198,6 +199,9 @@ class DesktopTarget : public FrameTarget {
   int roi_axis_ = 2;                     // ... through the volume along this axis
   // Movie export: keyframes (head poses), the export running, its frame read back from eye 0.
   std::unique_ptr<MoviePanel> movie_panel_;
+  std::unique_ptr<OpenPanel> open_panel_;
+  // Asks the caller to open `path` next (ViewerSetup::open_request) and closes the window.
+  void request_open(const std::string& path);
   std::vector<Pose> keyframes_;
   std::unique_ptr<MovieExport> export_;
   bool export_from_script_ = false;

@@ -1,5 +1,6 @@
 #include "xr/desktop/ui_script.h"
 
+#include <filesystem>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -87,6 +88,10 @@ Result<UiStep> parse_step(const std::string& text) {
     step.kind = UiStepKind::kPanelCard;
     step.arg = text.substr(text.find("panel-card") + 10);
     step.arg.erase(0, step.arg.find_first_not_of(" \t"));
+  } else if (cmd == "open") {
+    if (w.size() != 2) return invalid_argument("usage: open PATH (no spaces)");
+    step.kind = UiStepKind::kOpen;
+    step.arg = w[1];
   } else if (cmd == "restore-card") {
     if (w.size() != 2 || !parse_number(w[1], &step.xyz[0]) || step.xyz[0] < 1 || step.xyz[0] != std::floor(step.xyz[0]))
       return invalid_argument("usage: restore-card ID");
@@ -178,6 +183,12 @@ Result<UiScript> load_ui_script(const std::string& path, const ViewerState& stat
         if (!have_store) return script.step_error(i, "needs an annotation store (--annotations STORE)");
         break;
       case UiStepKind::kKeyframe: ++keyframes; break;
+      case UiStepKind::kOpen: {
+        std::error_code ec;
+        if (i + 1 != j.size()) return script.step_error(i, "open must be the last step (the window closes on it)");
+        if (!std::filesystem::exists(step->arg, ec)) return script.step_error(i, step->arg + " does not exist");
+        break;
+      }
       case UiStepKind::kExportMovie: {
         if (keyframes < 2)
           return script.step_error(i, "needs 2 keyframe steps before it (" + std::to_string(keyframes) + " so far)");
@@ -229,6 +240,10 @@ Result<UiScriptRunner::FrameWork> UiScriptRunner::before_frame(ViewerState& stat
     if (step.kind == UiStepKind::kRestoreCard) {
       work.restore_card = uint64_t(step.xyz[0]);
       continue;
+    }
+    if (step.kind == UiStepKind::kOpen) {
+      work.open = step.arg;
+      return work;
     }
     if (step.kind == UiStepKind::kPanelCard) {  // the picture is this frame's
       work.panel_card = step.arg;
@@ -298,7 +313,8 @@ Status UiScriptRunner::run_step(const UiStep& step, ViewerState& state) {
     case UiStepKind::kKeyframe:
     case UiStepKind::kExportMovie:
     case UiStepKind::kPanelCard:
-    case UiStepKind::kRestoreCard: break;
+    case UiStepKind::kRestoreCard:
+    case UiStepKind::kOpen: break;
   }
   return Status::ok();
 }

@@ -35,6 +35,8 @@
 //                             skeleton|track|roi (a track goes with its markers)
 //   panel-card TITLE...       the tools panel's "save card": this frame's picture and scene
 //   restore-card ID           the tools panel's "restore" of card ID
+//   open PATH                 the Open panel: the window closes and vxr view opens PATH
+//                             (any input it takes; the last step, PATH must exist)
 //   keyframe                  the movie panel's "add keyframe": the window's camera now
 //   export-movie OUT FRAMES [FPS]
 //                             the movie panel's "export": FRAMES frames along the smooth
@@ -60,7 +62,7 @@
 namespace vxr::xr {
 
 enum class UiStepKind { kViewer, kUi, kWait, kResize, kScreenshot, kCount, kMeasure, kCard, kTool, kClick, kPanelCard,
-                        kRestoreCard, kDrag, kFinish, kRemove, kKeyframe, kExportMovie };
+                        kRestoreCard, kDrag, kFinish, kRemove, kKeyframe, kExportMovie, kOpen };
 
 struct UiStep {
   UiStepKind kind = UiStepKind::kViewer;
@@ -108,6 +110,7 @@ class UiScriptRunner {
     bool keyframe = false;                       // the movie panel's "add keyframe"
     std::optional<MovieRequest> export_movie;    // the movie panel's "export" (the next step waits for it)
     std::optional<std::string> panel_card;       // "save card" in the tools panel, with this title
+    std::optional<std::string> open;             // the Open panel's "open" of this input
     std::optional<uint64_t> restore_card;        // "restore" of this card in the tools panel
   };
   // Applies the steps due before this frame (state edits, tool events).

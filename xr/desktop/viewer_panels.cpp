@@ -369,6 +369,21 @@ void draw_movie_panel(MoviePanel& panel) {
   ImGui::End();
 }
 
+void draw_open_panel(OpenPanel& panel) {
+  panel.open = false;
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos(ImVec2(10, size.y - 10), ImGuiCond_FirstUseEver, ImVec2(0, 1));
+  ImGui::SetNextWindowSize(ImVec2(360, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
+  if (ImGui::Begin("Open")) {
+    ImGui::InputText("path", panel.path, sizeof panel.path);
+    ImGui::TextDisabled("a .vxc, a project NAME.vxr, OME-Zarr or any importable file");
+    if (ImGui::Button("open")) panel.open = true;
+    if (!panel.message.empty()) ImGui::TextWrapped("%s", panel.message.c_str());
+  }
+  ImGui::End();
+}
+
 std::string viewer_window_title(const std::string& dataset, double frame_ms) {
   char ms[32];
   std::snprintf(ms, sizeof ms, "%.1f ms", frame_ms);

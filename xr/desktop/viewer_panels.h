@@ -82,6 +82,15 @@ void draw_tools_panel(ViewerTools& tools, ToolPanel& panel, uint32_t timepoint);
 // Keyframes of the camera and the movie export along them, with its progress.
 void draw_movie_panel(MoviePanel& panel);
 
+// Open another input (a .vxc, a project folder, any importable file): the
+// window closes and the viewer opens it.
+struct OpenPanel {
+  char path[1024] = "";
+  bool open = false;  // set for one frame
+  std::string message;
+};
+void draw_open_panel(OpenPanel& panel);
+
 // "vxr - DATASET - 12.3 ms" for the window title.
 std::string viewer_window_title(const std::string& dataset, double frame_ms);
 

@@ -35,6 +35,9 @@ struct ViewerSetup {
   // Start from the Scene found at view_memory (settings, timepoint, camera).
   // `vxr view` sets it when no --settings, --card or look flags were given.
   bool restore_view = false;
+  // The Open panel writes the input to open next here and closes the window;
+  // the caller (xr/view_command) then opens it. Null: no Open panel.
+  std::shared_ptr<std::string> open_request;
 };
 
 // The orbit that shows `scene`'s camera: the camera moved into the volume's
