@@ -188,11 +188,22 @@ float cell_exit(ivec3 cell, vec3 e, vec3 dl, float grow) {
 bool segment(uint b, vec3 dir, out float t0, out float t1) {
   const vec3 e = bricks[b].eye.xyz;
   const vec3 dl = dir * bricks[b].scale.xyz;  // local voxels per unit t
-  // Slab test; NaN from 0 * inf is dropped by min/max.
-  const vec3 inv = 1.0 / dl;
-  const vec3 ta = (bricks[b].box_lo.xyz - e) * inv;
-  const vec3 tb = (bricks[b].box_hi.xyz - e) * inv;
-  const vec3 tmin = min(ta, tb), tmax = max(ta, tb);
+  const vec3 lo = bricks[b].box_lo.xyz, hi = bricks[b].box_hi.xyz;
+  // Slab test. A ray parallel to a slab lies in it when lo <= e < hi: a face
+  // plane belongs to the box whose low face it is (as in the CPU reference),
+  // so of two neighbouring bricks exactly one marches a ray lying in their
+  // shared face; that axis then does not bound t (no 0 * inf).
+  vec3 tmin = vec3(-1.0 / 0.0), tmax = vec3(1.0 / 0.0);
+  for (int a = 0; a < 3; ++a) {
+    if (dl[a] == 0.0) {
+      if (e[a] < lo[a] || e[a] >= hi[a]) return false;
+      continue;
+    }
+    const float inv = 1.0 / dl[a];
+    const float ta = (lo[a] - e[a]) * inv, tb = (hi[a] - e[a]) * inv;
+    tmin[a] = min(ta, tb);
+    tmax[a] = max(ta, tb);
+  }
   t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
   t1 = min(min(min(tmax.x, tmax.y), tmax.z), g_t_limit);
   const vec4 pl = bricks[b].plane;

@@ -13,7 +13,7 @@
 #include "bench/stability.h"
 #include "gpu_fixture.h"
 #include "render/lod/brick_renderer.h"
-#include "render/raycaster.h"
+#include "render/lod/memory_volume.h"
 #include "render/reference_renderer.h"
 #include "volume/container_reader.h"
 #include "volume/memory_slab_source.h"
@@ -23,10 +23,11 @@ using namespace vxr;
 
 namespace {
 
-std::unique_ptr<Raycaster> make_caster() {
-  auto c = Raycaster::create(test::gpu_context());
-  REQUIRE(c.is_ok());
-  return std::move(c).value();
+// The one renderer over volumes in memory (64^3 bricks).
+std::unique_ptr<MemoryVolumeRenderer> renderer_for(const DenseVolume& v) {
+  auto r = MemoryVolumeRenderer::create(test::gpu_context(), {v});
+  REQUIRE_MESSAGE(r.is_ok(), r.status().to_string());
+  return std::move(r).value();
 }
 
 DenseVolume mri() {
@@ -70,9 +71,7 @@ TEST_CASE("accuracy: the same content at the origin and 2^20 voxels away differs
   const Camera cam0 = orbit_camera(p0, 35.0, 25.0, 1.4);
   RenderSettings s;
   s.step_voxels = 0.5;
-  auto caster = make_caster();
-  REQUIRE(caster->set_volume(at_origin).is_ok());
-  auto img0 = caster->render_float(cam0, s, 96, 96);
+  auto img0 = renderer_for(at_origin)->render_float(cam0, s, 96, 96);
   REQUIRE(img0.is_ok());
 
   double coverage = 0.0;
@@ -87,8 +86,7 @@ TEST_CASE("accuracy: the same content at the origin and 2^20 voxels away differs
     Camera cam = cam0;
     cam.eye += shift;
     cam.target += shift;
-    REQUIRE(caster->set_volume(far).is_ok());
-    auto img = caster->render_float(cam, s, 96, 96);
+    auto img = renderer_for(far)->render_float(cam, s, 96, 96);
     REQUIRE(img.is_ok());
     const double err = bench::max_abs_difference(*img0, *img);
     INFO("offset direction " << dir.x << "," << dir.y << "," << dir.z << ": max-abs " << err * 255.0 << "/255");
@@ -118,8 +116,7 @@ TEST_CASE("accuracy: no missed pixels among 10^6 rays grazing the faces of the b
   DenseVolume cube;
   cube.dims = {32, 32, 32};
   cube.data.assign(cube.voxel_count(), 255);
-  auto caster = make_caster();
-  REQUIRE(caster->set_volume(cube).is_ok());
+  auto renderer = renderer_for(cube);  // one brick
   RenderSettings s;
   s.density = 0.02;
   s.step_voxels = 1.0;
@@ -131,7 +128,7 @@ TEST_CASE("accuracy: no missed pixels among 10^6 rays grazing the faces of the b
   for (int view = 0; view < 16; ++view) {
     // Eye on an edge line of the box (two coordinates on faces).
     const Camera cam = grazing_camera(view, box, (view & 8) ? 32.0 : 0.0, (view & 1) ? 16.0 : 0.0);
-    auto img = caster->render_float(cam, s, w, h);
+    auto img = renderer->render_float(cam, s, w, h);
     REQUIRE(img.is_ok());
     const VoxelSpaceRays r = rays_in_voxel_space(cam, p, w, h);
     for (uint32_t y = 0; y < h; ++y)
@@ -247,8 +244,7 @@ TEST_CASE("accuracy: sample positions come from the step index: no drift along a
       const float v = z < cut ? static_cast<float>(z + 0.5) : 0.0f;
       std::memcpy(&ramp.data[size_t(i) * 4], &v, 4);
     }
-  auto caster = make_caster();
-  REQUIRE(caster->set_volume(ramp).is_ok());
+  auto renderer = renderer_for(ramp);  // 64 bricks along z
   Camera cam;  // world = voxel - dims/2: the eye 10 voxels below the box, looking up +z
   cam.eye = {0, 0, -2048.0 - 10.0};
   cam.target = {0, 0, 0};
@@ -261,8 +257,8 @@ TEST_CASE("accuracy: sample positions come from the step index: no drift along a
   s.step_voxels = 0.37;
   s.max_steps = 1u << 20;
 
-  // In double: samples at the middles of [t0 + i dt, t0 + (i+1) dt] (z = t - 10),
-  // the value the volume holds there, and the largest.
+  // In double: samples at t = (i + 1/2) dt from the eye (z = t - 10, the
+  // renderer's grid), the value the volume holds there, and the largest.
   const double dt = 0.37;
   auto value = [&](double z) {
     const double p = z - 0.5;  // trilinear along z between voxel centres
@@ -273,20 +269,21 @@ TEST_CASE("accuracy: sample positions come from the step index: no drift along a
   };
   double best = 0.0, best_z = 0.0;
   uint64_t best_i = 0;
-  for (uint64_t i = 0; (i + 0.5) * dt < 4096.0; ++i) {
-    const double z = (i + 0.5) * dt;
+  const uint64_t first = uint64_t(std::ceil(10.0 / dt - 0.5));  // the first sample in the box
+  for (uint64_t i = first; (i + 0.5) * dt - 10.0 < 4096.0; ++i) {
+    const double z = (i + 0.5) * dt - 10.0;
     if (value(z) > best) best = value(z), best_z = z, best_i = i;
   }
   CHECK(best_i > 10000);
 
   // The drifting alternative for comparison: float t accumulated step by step.
-  float t_acc = static_cast<float>(10.0 + 0.5 * dt);
-  for (uint64_t i = 0; i < best_i; ++i) t_acc += static_cast<float>(dt);
+  float t_acc = static_cast<float>((first + 0.5) * dt);
+  for (uint64_t i = first; i < best_i; ++i) t_acc += static_cast<float>(dt);
   const double drift = std::abs(double(t_acc) - 10.0 - best_z);
   INFO("accumulated float t drifts " << drift << " voxels over " << best_i << " steps");
   CHECK(drift > 0.05);  // so the check below would catch an accumulating marcher
 
-  auto mip = caster->render_float(cam, s, 1, 1);
+  auto mip = renderer->render_float(cam, s, 1, 1);
   REQUIRE(mip.is_ok());
   // MIP alpha is the transfer function's opacity of the windowed max: value / 4096.
   const double got = double(mip->rgba[3]) * 4096.0;
@@ -326,13 +323,12 @@ TEST_CASE("accuracy: stress cases are deterministic and cover every class") {
 
 TEST_CASE("accuracy: 1,000 seeded stress cases: no NaN/Inf, every error within its class bound") {
   test::GpuTestScope scope;
-  auto caster = make_caster();
   const auto& classes = bench::stability_classes();
   std::vector<uint32_t> per_class(classes.size(), 0);
   uint32_t failures = 0;
   for (uint32_t i = 0; i < 1000; ++i) {
     const auto c = bench::make_stability_case(1, i);
-    const auto o = bench::run_stability_case(*caster, c);
+    const auto o = bench::run_stability_case(test::gpu_context(), c);
     ++per_class[c.class_index];
     if (!o.passed) {
       ++failures;

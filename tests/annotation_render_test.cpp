@@ -2,7 +2,9 @@
 // cones tangent to them, ray-cast in a fragment shader over GPU-built guide
 // boxes. Checked against an independent CPU reference (sphere tracing the
 // exact distance to the convex hull of two spheres, in double), by goldens,
-// and composited with the volume: rays end at the annotations' depth.
+// and composited with the volume by the brick renderer (the underlay): rays
+// end at the annotations' depth, checked against the CPU reference ended at
+// the same depth.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -14,7 +16,7 @@
 #include "annotate/obj.h"
 #include "render/annotation_renderer.h"
 #include "render/lod/brick_renderer.h"
-#include "render/raycaster.h"
+#include "render/reference_renderer.h"
 #include "render_scenes.h"
 #include "volume/dense_chunk_source.h"
 
@@ -80,25 +82,6 @@ AnnotationScene test_scene() {
   return s;
 }
 
-// The MRI head (gray EA) with a dense ray caster and an annotation renderer:
-// the scene markers and meshes are composited into.
-struct HeadScene {
-  DenseVolume volume = test::mri();
-  std::unique_ptr<Raycaster> caster;
-  std::unique_ptr<AnnotationRenderer> annotations;
-  Camera camera = test::mri_camera(volume);
-  RenderSettings settings = test::mri_settings(OpticalModel::kEmissionAbsorption, "gray");
-  HeadScene() {
-    auto c = Raycaster::create(test::gpu_context());
-    REQUIRE(c.is_ok());
-    caster = std::move(*c);
-    REQUIRE(caster->set_volume(volume).is_ok());
-    auto a = AnnotationRenderer::create(test::gpu_context());
-    REQUIRE(a.is_ok());
-    annotations = std::move(*a);
-  }
-};
-
 Camera test_camera() {
   Camera c;
   c.eye = {0.4, -2.2, 1.0};
@@ -159,59 +142,6 @@ TEST_CASE("annotations: golden image of imposter spheres and tangent cones") {
   CHECK_MESSAGE(g.passed, g.message);
 }
 
-TEST_CASE("annotations: markers in front of and behind volume features, composited with rays ending at them") {
-  test::GpuTestScope scope;
-  const HeadScene head;
-  const DenseVolume& v = head.volume;
-  const auto& caster = head.caster;
-  const auto& renderer = head.annotations;
-  const Camera& cam = head.camera;
-  const RenderSettings& s = head.settings;
-  const uint32_t w = 128, h = 128;
-
-  // Two markers of the same size on the line from the eye through the volume
-  // centre's left and right: one between the eye and the head, one behind
-  // the head's centre.
-  const VolumePlacement placement{v.dims, v.voxel_size};
-  const PixelRays rays = rays_in_world(cam, w, h);
-  const double centre = glm::length(cam.target - cam.eye), radius = 0.02 * glm::length(placement.extent());
-  auto along = [&](double nx, double depth) { return rays.eye + depth * (rays.forward + nx * rays.right); };
-  AnnotationScene scene;
-  scene.spheres.push_back({along(-0.4, 0.35 * centre), radius, {1.0f, 0.2f, 0.2f, 1.0f}});   // in front
-  scene.spheres.push_back({along(0.25, 1.0 * centre), radius, {1.0f, 0.2f, 0.2f, 1.0f}});     // inside the head
-  auto ann = renderer->render(cam, scene, w, h);
-  REQUIRE(ann.is_ok());
-
-  REQUIRE(caster->set_depth(ann->view_depth, w, h).is_ok());
-  auto vol = caster->render_float(cam, s, w, h);
-  REQUIRE(vol.is_ok());
-  const ImageRgba8 out = composite_volume_over(*vol, ann->color);
-  // Pixel at each marker's centre: the front one shows its own red; the one
-  // inside is dimmed and greyed by the head in front of it.
-  auto pixel_at = [&](const glm::dvec3& p) {
-    const glm::dvec3 rel = p - rays.eye;
-    const glm::dmat3 inv = glm::inverse(glm::dmat3(rays.forward, rays.right, rays.up));
-    const glm::dvec3 c = inv * rel;  // (s, s nx, -s ny)
-    const uint32_t x = uint32_t((c.y / c.x + 1.0) * 0.5 * w), y = uint32_t((-c.z / c.x + 1.0) * 0.5 * h);
-    return size_t(y) * w + x;
-  };
-  const size_t front = pixel_at(scene.spheres[0].centre), inside = pixel_at(scene.spheres[1].centre);
-  const uint8_t* pf = &out.pixels[front * 4];
-  const uint8_t* pi = &out.pixels[inside * 4];
-  INFO("front " << int(pf[0]) << "," << int(pf[1]) << "," << int(pf[2]) << "  inside " << int(pi[0]) << ","
-                << int(pi[1]) << "," << int(pi[2]));
-  CHECK(pf[0] > 200);
-  CHECK(pf[0] > pf[1] + 100);                        // red, untouched by the volume
-  CHECK(int(pi[0]) - int(pi[1]) < int(pf[0]) - int(pf[1]) - 60);  // much less red: seen through the head
-  CHECK(vol->rgba[inside * 4 + 3] > 0.3f);           // the head lies in front of it
-  CHECK(vol->rgba[front * 4 + 3] < 0.02f);           // nothing lies in front of the front one
-  auto g = test::check_golden("annotation_markers_in_volume", over_black(out), test::gpu_context().info().fingerprint(), 3,
-                              "two red marker spheres on the MRI head (gray EA): the left one between the eye and the "
-                              "head, shown whole; the right one inside the head at the centre's depth, seen through "
-                              "the tissue in front of it (volume rays end at the markers' depth, volume composited over)");
-  CHECK_MESSAGE(g.passed, g.message);
-}
-
 TEST_CASE("meshes: OBJ files read with polygons, negative indices, groups as a hierarchy and line-numbered errors") {
   const std::string data = VXR_TESTDATA_DIR;
   auto ico = annotate::read_obj(data + "/obj/ico4.obj");
@@ -260,50 +190,8 @@ TEST_CASE("meshes: OBJ files read with polygons, negative indices, groups as a h
   CHECK(annotate::read_obj("/nonexistent/x.obj").status().code() == ErrorCode::kNotFound);
 }
 
-TEST_CASE("meshes: a surface inside the volume stops the rays at it (golden)") {
-  test::GpuTestScope scope;
-  const HeadScene head;
-  const DenseVolume& v = head.volume;
-  const auto& caster = head.caster;
-  const auto& renderer = head.annotations;
-  const Camera& cam = head.camera;
-  const RenderSettings& s = head.settings;
-  const uint32_t w = 128, h = 128;
-
-  auto ico = annotate::read_obj(std::string(VXR_TESTDATA_DIR) + "/obj/ico4.obj");
-  REQUIRE(ico.is_ok());
-  glm::dvec3 c(0.0);
-  for (const auto& p : ico->mesh.positions) c += glm::dvec3(p[0], p[1], p[2]);
-  c /= double(ico->mesh.positions.size());
-  const VolumePlacement placement{v.dims, v.voxel_size};
-  const double radius = 0.12 * glm::length(placement.extent());
-  AnnotationScene scene;
-  scene.meshes.push_back(annotation_mesh(ico->mesh, -radius * c, radius));  // centred in the head
-  auto ann = renderer->render(cam, scene, w, h);
-  REQUIRE(ann.is_ok());
-  // The centre pixel sees the sphere's near side: camera distance minus the
-  // radius, to the mesh's flattening (subdivision 4: under 0.3% of the radius).
-  const size_t mid = size_t(h / 2) * w + w / 2;
-  const double expect = glm::length(cam.eye - cam.target) - radius;
-  CHECK(std::abs(ann->view_depth[mid] - expect) < 0.01 * radius);
-  CHECK(!std::isfinite(ann->view_depth[0]));  // a corner sees no mesh
-
-  auto full = caster->render_float(cam, s, w, h);
-  REQUIRE(full.is_ok());
-  REQUIRE(caster->set_depth(ann->view_depth, w, h).is_ok());
-  auto vol = caster->render_float(cam, s, w, h);
-  REQUIRE(vol.is_ok());
-  CHECK(vol->rgba[mid * 4 + 3] < full->rgba[mid * 4 + 3]);  // less tissue in front of the surface than through the head
-  CHECK(vol->rgba[0] == full->rgba[0]);                     // where there is no mesh nothing changes
-  const ImageRgba8 out = composite_volume_over(*vol, ann->color);
-  auto g = test::check_golden("annotation_mesh_in_volume", over_black(out), test::gpu_context().info().fingerprint(), 3,
-                              "the ico4.obj sphere (grey, flat-shaded) centred in the MRI head (gray EA): volume rays "
-                              "end at its surface, the tissue in front of it is composited over");
-  CHECK_MESSAGE(g.passed, g.message);
-}
-
 // ---------------------------------------------------------------------------
-// The same scenes through the one renderer: the brick renderer takes the
+// Volume and annotations through the one renderer: the brick renderer takes the
 // annotations as an underlay (RenderTarget::under) recorded into its command
 // buffer, ends its rays at their depth and composites their colour under the
 // volume in its last pass.
@@ -342,6 +230,16 @@ struct BrickHeadScene {
     REQUIRE_MESSAGE(img.is_ok(), img.status().to_string());
     CHECK(st.lod.missing == 0);
     return over_black(*img);
+  }
+  // The CPU reference on the same samples, its rays ended at the annotations'
+  // depth, composited over their colour on the CPU.
+  ImageRgba8 reference(const AnnotationImage& ann, uint32_t w, uint32_t h) const {
+    ReferenceOptions ro{settings.step_voxels, 0};
+    ro.grid_from_eye = true;
+    ro.view_depth = ann.view_depth;
+    auto vol = render_reference(std::span(&volume, 1), camera, settings, w, h, ro);
+    REQUIRE(vol.is_ok());
+    return over_black(composite_volume_over(*vol, ann.color));
   }
 };
 
@@ -407,16 +305,10 @@ TEST_CASE("annotations through the brick renderer: rays end at the markers, whic
     CHECK(head.render(&scene, w, h, mode).pixels == with.pixels);
   }
 
-  // The dense comparison path (rays end at the same depth, composited on the
-  // CPU): the samplings differ only in the last partial segment the dense caster takes.
-  HeadScene dense;
-  REQUIRE(dense.caster->set_depth(ann->view_depth, w, h).is_ok());
-  auto vol = dense.caster->render_float(cam, dense.settings, w, h);
-  REQUIRE(vol.is_ok());
-  const ImageRgba8 dense_out = over_black(composite_volume_over(*vol, ann->color));
-  const int diff = max_abs_diff(dense_out, with);
-  INFO("brick vs dense composite, max abs " << diff);
-  CHECK(diff <= 2);  // measured 1 on lavapipe
+  // The CPU reference, ended at the same depth: GPU filtering is all that differs.
+  const int diff = max_abs_diff(head.reference(*ann, w, h), with);
+  INFO("brick renderer vs CPU reference, max abs " << diff);
+  CHECK(diff <= 2);
 
   auto g = test::check_golden("brick_annotation_markers_in_volume", with, test::gpu_context().info().fingerprint(), 3,
                               "annotation_markers_in_volume's scene through the brick renderer (32^3 bricks): the red "
@@ -448,13 +340,14 @@ TEST_CASE("annotations through the brick renderer: a mesh inside the volume stop
 
   auto ann = head.annotations->render(head.camera, scene, w, h);
   REQUIRE(ann.is_ok());
-  HeadScene dense;
-  REQUIRE(dense.caster->set_depth(ann->view_depth, w, h).is_ok());
-  auto vol = dense.caster->render_float(head.camera, dense.settings, w, h);
-  REQUIRE(vol.is_ok());
-  const int diff = max_abs_diff(over_black(composite_volume_over(*vol, ann->color)), with);
-  INFO("brick vs dense composite, max abs " << diff);
-  CHECK(diff <= 2);  // measured 1 on lavapipe
+  // The centre pixel sees the sphere's near side: camera distance minus the
+  // radius, to the mesh's flattening (subdivision 4: under 0.3% of the radius).
+  const double expect = glm::length(head.camera.eye - head.camera.target) - radius;
+  CHECK(std::abs(ann->view_depth[mid] - expect) < 0.01 * radius);
+  CHECK(!std::isfinite(ann->view_depth[0]));
+  const int diff = max_abs_diff(head.reference(*ann, w, h), with);
+  INFO("brick renderer vs CPU reference, max abs " << diff);
+  CHECK(diff <= 2);
 
   auto g = test::check_golden("brick_annotation_mesh_in_volume", with, test::gpu_context().info().fingerprint(), 3,
                               "annotation_mesh_in_volume's scene through the brick renderer (32^3 bricks): the ico4.obj "

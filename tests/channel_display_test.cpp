@@ -203,13 +203,11 @@ TEST_CASE("channel display: the session draws a channel in the file's colour unl
   REQUIRE(h.is_ok());
   CHECK(h->settings.channels[0].colormap == "hot");
 
-  // The comparison renderers (vxr render --renderer dense / --reference) resolve the same colour.
-  DenseStillOptions dense;
-  dense.width = 16, dense.height = 16;
-  dense.renderer = DenseRenderer::kReference;
-  auto still = render_still_dense(nullptr, kColoured, none,
-                                  [](const VolumePlacement& p, bool) -> Result<Camera> { return orbit_camera(p, 30, 25); },
-                                  dense);
+  // The CPU reference picture (vxr render --reference) resolves the same colour.
+  ReferenceStillOptions ro;
+  ro.width = 16, ro.height = 16;
+  auto still = render_still_reference(
+      kColoured, none, [](const VolumePlacement& p, bool) -> Result<Camera> { return orbit_camera(p, 30, 25); }, ro);
   REQUIRE_MESSAGE(still.is_ok(), still.status().to_string());
   CHECK(still->settings == s->settings);
 

@@ -65,11 +65,11 @@ TEST_CASE("gpu: images past the device limits are refused before Vulkan sees the
 
 TEST_CASE("gpu: shaders are embedded at build time and load as modules") {
   vxr::test::GpuTestScope scope;
-  auto blob = gpu::find_shader("raycast.comp");
+  auto blob = gpu::find_shader("brick_raycast.comp");
   REQUIRE(blob.is_ok());
   CHECK(blob->word_count > 100);
   CHECK(blob->words[0] == 0x07230203u);  // SPIR-V magic
-  CHECK(gpu::create_shader_module(gpu_context(), "raycast.comp").is_ok());
+  CHECK(gpu::create_shader_module(gpu_context(), "brick_raycast.comp").is_ok());
   auto missing = gpu::find_shader("nope.comp");
   CHECK(missing.status().code() == ErrorCode::kNotFound);
 }

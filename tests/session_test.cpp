@@ -1,6 +1,6 @@
 // One session for `vxr view` and `vxr render` (engine/render/volume_session.h):
 // the same defaults, --channel, --timepoint and --settings resolve the same
-// RenderSettings for both renderers, and the two commands draw the same
+// RenderSettings for both commands (and the CPU reference), and the two commands draw the same
 // pixels for the same input and flags.
 #include <doctest/doctest.h>
 
@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // Three signed 8-bit channels, 439x167x5: small enough that the session's
-// windows come from level 0, the whole volume, as the dense renderer's do.
+// windows come from level 0, the whole volume, as the whole-volume reference's do.
 const std::string kThreeChannels = std::string(VXR_TESTDATA_DIR) + "/ome-tiff/multi-channel-z-series.ome.tif";
 
 std::string q(const fs::path& p) { return shell_quote(p.string()); }
@@ -32,7 +32,7 @@ VolumeSession open_ok(const SessionFlags& flags) {
   return std::move(session).value();
 }
 
-// The settings `vxr render --renderer dense` resolves: the whole volume loaded, windows from it.
+// The settings `vxr render --reference` resolves: the whole volume loaded, windows from it.
 RenderSettings dense_settings(const SessionFlags& given, std::vector<uint32_t>* channels) {
   auto flags = complete_session_flags(given);
   REQUIRE(flags.is_ok());
@@ -55,7 +55,7 @@ void write_text(const fs::path& path, const std::string& text) {
 
 }  // namespace
 
-TEST_CASE("session: defaults, --channel and --settings resolve the same settings for the out-of-core and dense paths") {
+TEST_CASE("session: defaults, --channel and --settings resolve the same settings for the out-of-core renderer and the whole-volume reference") {
   const fs::path dir = scratch_dir("session", "resolve");
   auto loaded = load_for_render(kThreeChannels, 2048, uint64_t(1) << 30);
   REQUIRE(loaded.is_ok());

@@ -2,8 +2,8 @@
 // renderer vxr view uses, for every input. Only flags live here: the session
 // (source, settings, channels, timepoint; the same as vxr view's) is
 // render/volume_session.h, the frames render/still_render.h. For comparison:
-// --renderer dense (the dense GPU ray caster, compute or fragment path) and
-// --reference (CPU reference), with the same resolved settings.
+// --reference draws the CPU reference (double precision) with the same
+// resolved settings instead; with --json it measures each frame against it.
 //
 // Settings come from --settings (a RenderSettings JSON, or a Scene JSON with
 // "render" and "camera"), then the flags override them. Bad settings exit 2
@@ -11,7 +11,7 @@
 //
 // Cards: --save-card STORE stores the picture as a card whose Scene holds every
 // resolved choice (input, timepoint, channels, windows, camera, size,
-// renderer); --card STORE:ID starts from that Scene, so the same build draws
+// LOD bias); --card STORE:ID starts from that Scene, so the same build draws
 // the same pixels again.
 //
 // Timing (out-of-core renderer): --frames N --json prints each frame's GPU ms
@@ -32,7 +32,6 @@
 #include "core/output_file.h"
 #include "core/trace.h"
 #include "render/camera.h"
-#include "render/raycaster.h"
 #include "render/transfer_function.h"
 #include "render/still_render.h"
 #include "render/volume_session.h"
@@ -43,16 +42,15 @@ namespace vxr::cli {
 namespace {
 
 struct Options {
-  std::string input, output, camera, size = "512x512", path = "compute";
-  std::string renderer;  // "" = lod, unless a dense-only choice (--reference, --path fragment) asks for dense
+  std::string input, output, camera, size = "512x512";
   double fov = 0.0, reference_step = 1.0 / 16.0;
   double lod_bias = 0.0, frame_budget_ms = 0.0;
   bool lod_bias_given = false;
-  int frames = 0;  // 0: until converged (lod) / one frame (dense)
+  int frames = 0;  // 0: until converged
   bool reference = false, stats = false;
   bool no_skip = false;  // lod: no empty-space skipping (bricks or cells), for A/B timing
   bool json = false;     // lod: per-frame figures as JSON on stdout
-  bool size_given = false, path_given = false;
+  bool size_given = false;
   std::string card;       // STORE:ID to restore
   std::string save_card;  // STORE to add a card to
   std::string card_title, card_note;
@@ -61,7 +59,6 @@ struct Options {
 
 // What the render resolved, for --save-card.
 struct Resolved {
-  std::string renderer;
   std::vector<uint32_t> channels;
   RenderSettings settings;
   Camera camera;
@@ -105,7 +102,7 @@ int run_lod(const Options& o, gpu::Context& gpu, uint32_t width, uint32_t height
   auto chosen = camera_for(placement, info.dims[2] == 1);
   if (!chosen) return fail(chosen.status(), kExitUsage);
   const Camera& camera = *chosen;
-  *resolved = {"lod", session->channels, s, camera};
+  *resolved = {session->channels, s, camera};
 
   StillOptions so;
   so.width = width;
@@ -188,9 +185,9 @@ int save_card(const Options& o, Scene sc, const Resolved& r, uint32_t width, uin
                {r.camera.up.x, r.camera.up.y, r.camera.up.z},
                r.camera.fov_y_deg};
   sc.viewport = {width, height};
-  sc.renderer = r.renderer;
-  sc.path = r.renderer == "dense" ? o.path : "";
-  sc.lod_bias = r.renderer == "lod" ? o.lod_bias : 0.0;
+  sc.renderer = "lod";
+  sc.path.clear();
+  sc.lod_bias = o.lod_bias;
   if (auto vs = parse_voxel_size_flag(o.flags.voxel_size); vs.is_ok() && vs->has_value()) sc.voxel_size = **vs;
   sc.render = r.settings;
   sc.annotations = o.flags.annotations.empty() ? "" : std::filesystem::absolute(o.flags.annotations, ec).lexically_normal().string();
@@ -219,8 +216,6 @@ int run(const Options& given) {
   auto adopt_scene_choices = [&](const Scene& sc) {
     if (!o.size_given && sc.viewport[0] > 0)
       o.size = std::to_string(sc.viewport[0]) + "x" + std::to_string(sc.viewport[1]);
-    if (o.renderer.empty()) o.renderer = sc.renderer;
-    if (!o.path_given && !sc.path.empty()) o.path = sc.path;
     if (!o.lod_bias_given && sc.lod_bias != 0.0) o.lod_bias = sc.lod_bias, o.lod_bias_given = true;
   };
   if (!o.card.empty()) {
@@ -231,6 +226,9 @@ int run(const Options& given) {
       return fail(sc.status(), c == ErrorCode::kInvalidArgument || c == ErrorCode::kNotFound ? kExitUsage : kExitFailure);
     }
     if (o.input.empty()) o.input = sc->volume;
+    if (sc->renderer == "dense")
+      std::fprintf(stderr, "vxr: note: card %s was drawn by the dense renderer (since removed); drawing it out of core\n",
+                   o.card.c_str());
     o.flags.start = SettingsStart{*sc, /*is_scene=*/true, /*has_window=*/true};  // a card holds resolved windows
   }
   if (o.input.empty())
@@ -259,52 +257,39 @@ int run(const Options& given) {
   if (std::sscanf(o.size.c_str(), "%ux%u", &width, &height) != 2 || width == 0 || height == 0 || width > 16384 ||
       height > 16384)
     return fail(invalid_argument("--size: expected WxH like 512x512, got '" + o.size + "'"), kExitUsage);
-  if (o.path != "compute" && o.path != "fragment")
-    return fail(invalid_argument("--path: use compute or fragment, not '" + o.path + "'"), kExitUsage);
-
-  // Which renderer: the out-of-core brick renderer (vxr view's) for every
-  // input; the dense one only when asked for (--renderer dense, the fragment
-  // path, the CPU reference), as a comparison.
-  const bool procedural = starts_with(o.input, "procedural:");
-  if (!o.renderer.empty() && o.renderer != "lod" && o.renderer != "dense")
-    return fail(invalid_argument("--renderer: use lod or dense, not '" + o.renderer + "'"), kExitUsage);
-  std::string renderer = o.renderer;
-  if (renderer.empty()) renderer = (o.reference && !o.json) || (o.path_given && o.path == "fragment") ? "dense" : "lod";
-  if (renderer == "lod" && o.path_given && o.path == "fragment")
-    return fail(invalid_argument("--path fragment: the dense renderer's fragment path; add --renderer dense"),
+  if (o.reference && !o.json && (o.lod_bias_given || o.frame_budget_ms != 0.0 || o.no_skip || o.frames != 0))
+    return fail(invalid_argument(std::string(o.lod_bias_given          ? "--lod-bias"
+                                             : o.frame_budget_ms != 0.0 ? "--frame-budget-ms"
+                                             : o.no_skip                ? "--no-skip"
+                                                                        : "--frames") +
+                                 ": the CPU reference (--reference) draws the whole volume once; drop it, or add "
+                                 "--json to measure the GPU frames against the reference"),
                 kExitUsage);
-  if (renderer == "dense" && !o.flags.annotations.empty())
-    return fail(invalid_argument("--annotations: drawn by the out-of-core renderer; drop --renderer dense"), kExitUsage);
-  if (renderer == "dense" && procedural)
-    return fail(invalid_argument("--renderer dense: a procedural source is drawn only by --renderer lod"), kExitUsage);
-  if (renderer == "dense" && (o.json || o.no_skip))
-    return fail(invalid_argument(std::string(o.json ? "--json" : "--no-skip") +
-                                 ": only the out-of-core renderer (--renderer lod) reports frames and skips empty space"),
+  if (o.reference && !o.json && starts_with(o.input, "procedural:"))
+    return fail(invalid_argument("--reference: a procedural source is drawn by the GPU only (add --json to measure "
+                                 "its frames against the reference of its finest level)"),
                 kExitUsage);
+  if (o.reference && !o.json && !o.flags.annotations.empty())
+    return fail(invalid_argument("--annotations: drawn by the GPU renderer; drop --reference"), kExitUsage);
   if (o.json && (o.frame_budget_ms != 0.0 || !o.save_card.empty()))
     return fail(invalid_argument("--json: measures fixed frames; drop --frame-budget-ms and --save-card"), kExitUsage);
-  if (renderer == "lod" && o.reference && !o.json)
-    return fail(invalid_argument("--reference: the CPU reference draws a whole volume; use --renderer dense"), kExitUsage);
-  if (renderer == "dense" && (o.lod_bias_given || o.frame_budget_ms != 0.0))
-    return fail(invalid_argument(std::string(o.lod_bias_given ? "--lod-bias" : "--frame-budget-ms") +
-                                 ": only the out-of-core renderer has levels of detail; drop --renderer dense"),
-                kExitUsage);
   if (o.frame_budget_ms < 0.0 || !std::isfinite(o.frame_budget_ms))
     return fail(invalid_argument("--frame-budget-ms: must be > 0 milliseconds"), kExitUsage);
   if (o.frames < 0 || o.frames > 100000) return fail(invalid_argument("--frames: must be 1..100000"), kExitUsage);
   // The reference marches every sample in double on the CPU: below 1/256 voxel it would run for days.
   if (o.reference && !(o.reference_step >= 1.0 / 256 && o.reference_step <= 64.0))
     return fail(invalid_argument("--reference-step: must be within 1/256..64 voxels (default 1/16)"), kExitUsage);
-  if (renderer == "dense" && o.flags.timepoint != 0)
-    return fail(invalid_argument("--timepoint: the dense renderer loads timepoint 0 only; draw other timepoints "
-                                 "out of core (a .vxc from `vxr import`, or OME-Zarr; --renderer lod)"),
+  if (o.reference && !o.json && o.flags.timepoint != 0)
+    return fail(invalid_argument("--timepoint: the CPU reference (--reference) reads timepoint 0 only; add --json to "
+                                 "measure the GPU frames of other timepoints against it"),
                 kExitUsage);
   if (!std::isfinite(o.lod_bias) || std::abs(o.lod_bias) > 16.0)
     return fail(invalid_argument("--lod-bias: must be within -16..16 (log2 of voxels per pixel)"), kExitUsage);
 
   std::unique_ptr<gpu::Context> gpu;
   uint32_t max_dim = 2048;
-  if (!o.reference || renderer == "lod") {
+  const bool reference_only = o.reference && !o.json;
+  if (!reference_only) {
     auto g = open_gpu();
     if (!g) return fail(g.status());
     gpu = std::move(g).value();
@@ -340,31 +325,27 @@ int run(const Options& given) {
     return save_card(o, scene, resolved, width, height);
   };
 
-  if (renderer == "lod") return finish(run_lod(o, *gpu, width, height, camera_for, &resolved));
+  if (!reference_only) return finish(run_lod(o, *gpu, width, height, camera_for, &resolved));
 
-  DenseStillOptions dense;
-  dense.width = width;
-  dense.height = height;
-  dense.renderer = o.reference ? DenseRenderer::kReference
-                   : o.path == "fragment" ? DenseRenderer::kFragment
-                                          : DenseRenderer::kCompute;
-  dense.reference_step = o.reference_step;
-  dense.max_dim = max_dim;
+  ReferenceStillOptions ro;
+  ro.width = width;
+  ro.height = height;
+  ro.reference_step = o.reference_step;
+  ro.max_dim = max_dim;
   SessionStep failed_at = SessionStep::kSettings;
-  auto still = render_still_dense(gpu.get(), o.input, o.flags, camera_for, dense, &failed_at);
+  auto still = render_still_reference(o.input, o.flags, camera_for, ro, &failed_at);
   if (!still) {
     const bool usage = failed_at != SessionStep::kSource && still.status().code() == ErrorCode::kInvalidArgument;
     return fail(still.status(), usage ? kExitUsage : kExitFailure);
   }
   for (const std::string& n : still->notes) std::fprintf(stderr, "vxr: note: %s: %s\n", o.input.c_str(), n.c_str());
-  resolved = {"dense", still->channels, still->settings, still->camera};
   if (Status st = write_png(o.output, over_black(still->image)); !st) return fail(st);
-  std::printf("%s: %ux%u, %s, %s, %.1f ms\n", o.output.c_str(), width, height, optical_model_name(still->settings.model),
-              o.reference ? "CPU reference" : (o.path + " path").c_str(), still->ms);
+  std::printf("%s: %ux%u, %s, CPU reference, %.1f ms\n", o.output.c_str(), width, height,
+              optical_model_name(still->settings.model), still->ms);
   if (o.stats)
-    std::printf("stats: renderer dense, shrink %u, samples <= %llu (before early termination), %.1f ms\n", still->shrink,
+    std::printf("stats: CPU reference, shrink %u, samples <= %llu (before early termination), %.1f ms\n", still->shrink,
                 (unsigned long long)still->sample_bound, still->ms);
-  return finish(kExitOk);
+  return kExitOk;
 }
 
 }  // namespace
@@ -378,20 +359,18 @@ void add_render_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--fov", o->fov, "vertical field of view in degrees");
   cmd->add_option("--size", o->size, "WxH (default 512x512)");
   add_session_flags(cmd, &o->flags);
-  cmd->add_option("--path", o->path, "dense renderer: compute (default) or fragment (implies --renderer dense)");
-  cmd->add_option("--renderer", o->renderer,
-                  "lod (the out-of-core brick renderer vxr view uses; the default for every input) or dense (whole volume, "
-                  "a comparison)");
-  cmd->add_option("--lod-bias", o->lod_bias, "lod: log2 of voxels per pixel accepted (+1 coarser, -1 finer; default 0)");
+  cmd->add_option("--lod-bias", o->lod_bias, "log2 of voxels per pixel accepted (+1 coarser, -1 finer; default 0)");
   cmd->add_option("--frame-budget-ms", o->frame_budget_ms,
-                  "lod: render --frames frames, adjusting the LOD bias to hold this frame time");
-  cmd->add_option("--frames", o->frames, "lod: frames to render (default: until converged; 30 with a frame budget)");
+                  "render --frames frames, adjusting the LOD bias to hold this frame time");
+  cmd->add_option("--frames", o->frames, "frames to render (default: until converged; 30 with a frame budget)");
   cmd->add_flag("--stats", o->stats, "print the final frame's statistics (bricks, samples, uploads, cache hits)");
-  cmd->add_flag("--reference", o->reference, "render with the CPU reference renderer (double precision, slow)");
+  cmd->add_flag("--reference", o->reference,
+                "draw the CPU reference (double precision, whole volume, slow) instead; with --json: measure each GPU "
+                "frame against it");
   cmd->add_option("--reference-step", o->reference_step, "the reference's step in voxels (default 1/16)");
-  cmd->add_flag("--no-skip", o->no_skip, "lod: march empty space too (no brick or cell skipping; same image, for timing)");
+  cmd->add_flag("--no-skip", o->no_skip, "march empty space too (no brick or cell skipping; same image, for timing)");
   cmd->add_flag("--json", o->json,
-                "lod: print per-frame GPU ms, wall ms and samples as JSON (with --reference: RMSE against the CPU "
+                "print per-frame GPU ms, wall ms and samples as JSON (with --reference: RMSE against the CPU "
                 "reference of the finest level, 8-bit units)");
   add_annotations_option(cmd, o->flags.annotations);
   cmd->add_option("--card", o->card,
@@ -404,7 +383,6 @@ void add_render_command(CLI::App& app, Invocation& inv) {
     o->lod_bias_given = cmd->count("--lod-bias") > 0;
     o->size_given = cmd->count("--size") > 0;
     note_session_flags(cmd, &o->flags);
-    o->path_given = cmd->count("--path") > 0;
     inv.run = [o] { return run(*o); };
   });
 }

@@ -8,10 +8,7 @@
 // warp u -> ndc is piecewise linear, so every band pair is an ordinary
 // off-axis frustum. The out-of-core renderer casts the whole warped grid as
 // one view (RenderTarget::warp_x/warp_y: each ray follows the warp) and
-// xr/eye_renderer stretches the bands onto the eye with linear blits; the
-// dense ray caster renders the 3x3 tiles with exact rays, and
-// resample_warped() maps its warped image back onto the full pixel grid
-// (bilinear in warped coordinates; centre pixels land exactly on a sample).
+// xr/eye_renderer stretches the bands onto the eye with linear blits.
 #pragma once
 
 #include <cstdint>
@@ -19,7 +16,6 @@
 
 #include "core/image.h"
 #include "core/status.h"
-#include "render/raycaster.h"
 #include "render/volume_renderer.h"
 
 namespace vxr::xr {
@@ -42,15 +38,5 @@ struct WarpBand {
   uint32_t full[4];
 };
 std::vector<WarpBand> warp_bands(const WarpAxis& ax, const WarpAxis& ay);
-
-// Dense ray caster (the CPU-side comparison in bench accuracy): renders `camera` (its frustum must be set) at width x height output pixels
-// through the warped grid and resamples it. `rays` (if given) receives the
-// number of rays cast.
-Result<ImageRgba8> render_lens_warped(Raycaster& caster, const Camera& camera, const RenderSettings& settings,
-                                      uint32_t width, uint32_t height, const LensWarp& warp,
-                                      uint64_t* rays = nullptr);
-
-// Maps a warped image (ax.warped() x ay.warped()) onto the full grid.
-ImageRgba8 resample_warped(const ImageRgba8& warped, const WarpAxis& ax, const WarpAxis& ay);
 
 }  // namespace vxr::xr

@@ -82,6 +82,22 @@ Result<ImageRgba8> read_png(const std::string& path) {
   return img;
 }
 
+ImageRgba8 to_rgba8(const ImageRgbaF& f) {
+  ImageRgba8 img(f.width, f.height);
+  for (size_t i = 0; i < f.rgba.size(); ++i) {
+    const float v = f.rgba[i];
+    const float c = v > 0.0f ? (v < 1.0f ? v : 1.0f) : 0.0f;  // NaN -> 0
+    img.pixels[i] = static_cast<uint8_t>(c * 255.0f + 0.5f);
+  }
+  return img;
+}
+
+ImageRgba8 over_black(const ImageRgba8& premultiplied) {
+  ImageRgba8 out = premultiplied;
+  for (size_t i = 3; i < out.pixels.size(); i += 4) out.pixels[i] = 255;
+  return out;
+}
+
 PixelDifference compare_pixels(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   PixelDifference out;
   const size_t n = std::min(a.size(), b.size());

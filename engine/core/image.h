@@ -21,6 +21,20 @@ struct ImageRgba8 {
   const uint8_t* at(uint32_t x, uint32_t y) const { return &pixels[(size_t(y) * width + x) * 4]; }
 };
 
+// Premultiplied RGBA floats, row-major, top row first: a renderer's pixels
+// before the one rounding to 8 bits.
+struct ImageRgbaF {
+  uint32_t width = 0, height = 0;
+  std::vector<float> rgba;
+};
+
+// Rounds to nearest (v * 255 + 0.5, clamped; NaN -> 0): the one float -> 8-bit
+// rule, the GPU's (brick_raycast.comp) and the CPU reference's.
+ImageRgba8 to_rgba8(const ImageRgbaF& image);
+
+// Premultiplied RGBA over an opaque black background (what PNG viewers show).
+ImageRgba8 over_black(const ImageRgba8& premultiplied);
+
 // How two equally sized 8-bit pixel arrays differ, every byte (R, G, B, A)
 // counted, in 8-bit units: what `vxr compare` reports.
 struct PixelDifference {

@@ -73,16 +73,6 @@ Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const Comput
   return p;
 }
 
-Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const FullscreenPipelineCreateInfo& info) {
-  GraphicsPipelineCreateInfo g;
-  g.vertex_shader = info.vertex_shader;
-  g.fragment_shader = info.fragment_shader;
-  g.bindings = info.bindings;
-  g.color_formats = {info.color_format};
-  g.specialization = info.specialization;
-  return create_graphics_pipeline(ctx, g);
-}
-
 Result<ComputePipeline> create_graphics_pipeline(const Context& ctx, const GraphicsPipelineCreateInfo& info) {
   VkDevice dev = ctx.device();
   ComputePipeline p;

@@ -1,4 +1,4 @@
-// Compute pipelines and their descriptor sets.
+// Compute and graphics pipelines and their descriptor sets.
 #pragma once
 
 #include <vulkan/vulkan.h>
@@ -18,7 +18,7 @@ struct SpecializationConstant {
 };
 
 struct ComputePipelineCreateInfo {
-  std::string_view shader;  // embedded name, e.g. "raycast.comp"
+  std::string_view shader;  // embedded name, e.g. "brick_raycast.comp"
   std::vector<VkDescriptorSetLayoutBinding> bindings;  // set 0
   uint32_t push_constant_bytes = 0;
   std::vector<SpecializationConstant> specialization;
@@ -31,19 +31,6 @@ struct ComputePipeline {
 };
 
 Result<ComputePipeline> create_compute_pipeline(const Context& ctx, const ComputePipelineCreateInfo& info);
-
-// A graphics pipeline that draws one full-screen triangle (3 vertices, no
-// vertex buffer) into one colour attachment with dynamic rendering; viewport
-// and scissor are dynamic. No blending, no depth.
-struct FullscreenPipelineCreateInfo {
-  std::string_view vertex_shader;    // embedded name, e.g. "fullscreen.vert"
-  std::string_view fragment_shader;  // e.g. "raycast.frag"
-  std::vector<VkDescriptorSetLayoutBinding> bindings;  // set 0
-  VkFormat color_format = VK_FORMAT_R8G8B8A8_UNORM;
-  std::vector<SpecializationConstant> specialization;  // fragment stage
-};
-// Same members as a compute pipeline: set layout, layout, pipeline.
-Result<ComputePipeline> create_fullscreen_pipeline(const Context& ctx, const FullscreenPipelineCreateInfo& info);
 
 // A graphics pipeline for dynamic rendering with no vertex buffers (the vertex
 // shader builds its geometry from gl_VertexIndex / gl_InstanceIndex and

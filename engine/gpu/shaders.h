@@ -1,7 +1,7 @@
 // SPIR-V compiled from shaders_glsl/ at build time and embedded in the binary.
 //
-// Names are the GLSL file name without ".glsl": "raycast.comp" is
-// shaders_glsl/raycast.comp.glsl. There is no runtime file lookup.
+// Names are the GLSL file name without ".glsl": "brick_raycast.comp" is
+// shaders_glsl/brick_raycast.comp.glsl. There is no runtime file lookup.
 #pragma once
 
 #include <cstddef>

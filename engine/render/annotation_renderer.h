@@ -12,8 +12,9 @@
 // between it and the eye, and one in front of it is seen whole. The frame
 // path: record() into the frame's command buffer, then the brick renderer's
 // record_view with the returned ViewUnderlay (RenderTarget::under) does both
-// in its compute pass. The dense comparison path: render() reads the images
-// back, Raycaster::set_depth, then composite_volume_over on the CPU.
+// in its compute pass. The CPU comparison: render() reads the images back,
+// the CPU reference ends its rays at view_depth (ReferenceOptions), then
+// composite_volume_over.
 #pragma once
 
 #include <glm/glm.hpp>
@@ -31,7 +32,7 @@
 #include "gpu/pipeline.h"
 #include "gpu/resources.h"
 #include "render/camera.h"
-#include "render/raycaster.h"  // ImageRgbaF
+#include "core/image.h"
 #include "render/volume_renderer.h"  // ViewUnderlay
 
 namespace vxr {
@@ -109,7 +110,7 @@ class AnnotationRenderer {
                               uint32_t width, uint32_t height);
 
   // Draws the scene offscreen (view 0), submits, waits and reads it back
-  // (tests, and the dense ray caster's depth input).
+  // (tests, and the CPU reference's depth input: ReferenceOptions::view_depth).
   Result<AnnotationImage> render(const Camera& camera, const AnnotationScene& scene, uint32_t width, uint32_t height);
 
  private:

@@ -69,8 +69,8 @@ glm::dvec3 pixel_ray(const VoxelSpaceRays& r, uint32_t width, uint32_t height, u
 // by the slab test in double; 0 when it misses.
 double length_in_box(const glm::dvec3& eye, const glm::dvec3& dir, const glm::dvec3& dims);
 
-// Samples the dense ray caster takes at `step` voxels without early
-// termination: per pixel, ceil(length in the box / step).
+// Samples a ray marching the whole box takes at `step` voxels without early
+// termination or skipping: per pixel, ceil(length in the box / step).
 uint64_t dense_sample_count(const Camera& c, const VolumePlacement& v, double step, uint32_t width, uint32_t height);
 
 }  // namespace vxr

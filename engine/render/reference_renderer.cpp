@@ -233,6 +233,11 @@ class Tracer {
       else if (den < 0.0) t1 = std::min(t1, -num / den);
       else if (num < 0.0) return dvec4(0.0);
     }
+    if (!opt_.view_depth.empty()) {
+      // A view depth z lies at t = z * |raw direction| (the raw direction has unit view depth), as on the GPU.
+      const double z = opt_.view_depth[size_t(py) * s_.width + px];
+      t1 = std::min(t1, z * glm::length(s_.rays.forward + ndx * s_.rays.right - ndy * s_.rays.up));
+    }
     if (!(t1 > t0)) return dvec4(0.0);
     Ray r;
     r.density = ray_density(s_, dir);
@@ -273,6 +278,9 @@ Result<ImageRgbaF> render_reference(std::span<const DenseVolume> channels, const
     return invalid_argument("the reference renderer takes 1 to 4 channels");
   if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
   if (!(options.step_voxels > 0.0)) return invalid_argument("reference step must be > 0 voxels");
+  if (!options.view_depth.empty() && options.view_depth.size() != size_t(width) * height)
+    return invalid_argument("reference: the depth image has " + std::to_string(options.view_depth.size()) +
+                            " values for " + std::to_string(width) + "x" + std::to_string(height) + " pixels");
   VXR_RETURN_IF_ERROR(validate_render_settings(settings, static_cast<uint32_t>(channels.size())));
   Volumes vols;
   vols.nx = channels[0].dims[0];

@@ -5,7 +5,6 @@
 #include <memory>
 
 #include "render/annotation_renderer.h"
-#include "render/raycaster.h"
 #include "render/reference_renderer.h"
 #include "volume/container_reader.h"
 #include "volume/load_dense.h"
@@ -17,6 +16,20 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// The reference's options for `step` with the settings' cut plane and box,
+// clipped as the bricks are.
+ReferenceOptions clipped_reference(const RenderSettings& s, const std::array<uint64_t, 3>& dims, double step) {
+  ReferenceOptions ro{step, 0};
+  LodSettings clip;
+  apply_clip(s.clip, dims, clip);
+  if (clip.cut.enabled) ro.plane = glm::dvec4(clip.cut.normal, clip.cut.offset);
+  if (clip.roi.enabled) {
+    ro.clip_lo = clip.roi.lo;
+    ro.clip_hi = clip.roi.hi;
+  }
+  return ro;
+}
+
 // The CPU reference of the finest level of the drawn channels, over black.
 Result<std::vector<uint8_t>> reference_pixels(const VolumeSession& session, const Camera& camera, const StillOptions& o,
                                               double* cpu_ms) {
@@ -26,14 +39,7 @@ Result<std::vector<uint8_t>> reference_pixels(const VolumeSession& session, cons
     level0.push_back(std::move(dense));
   }
   const auto t0 = std::chrono::steady_clock::now();
-  ReferenceOptions ro{o.reference_step, 0};
-  LodSettings clip;  // the settings' cut plane and box, clipped as the bricks are
-  apply_clip(session.settings.clip, session.source->info().dims, clip);
-  if (clip.cut.enabled) ro.plane = glm::dvec4(clip.cut.normal, clip.cut.offset);
-  if (clip.roi.enabled) {
-    ro.clip_lo = clip.roi.lo;
-    ro.clip_hi = clip.roi.hi;
-  }
+  const ReferenceOptions ro = clipped_reference(session.settings, session.source->info().dims, o.reference_step);
   VXR_ASSIGN_OR_RETURN(ImageRgbaF ref, render_reference(level0, camera, session.settings, o.width, o.height, ro));
   *cpu_ms = ms_since(t0);
   return over_black(to_rgba8(ref)).pixels;
@@ -115,21 +121,17 @@ Result<StillResult> render_still(gpu::Context& gpu, const VolumeSession& session
   return out;
 }
 
-Result<DenseStill> render_still_dense(gpu::Context* gpu, const std::string& input, const SessionFlags& given_flags,
-                                      const CameraChooser& camera_for, const DenseStillOptions& o,
-                                      SessionStep* failed_at) {
+Result<ReferenceStill> render_still_reference(const std::string& input, const SessionFlags& given_flags,
+                                              const CameraChooser& camera_for, const ReferenceStillOptions& o,
+                                              SessionStep* failed_at) {
   SessionStep step_unused;
   SessionStep& step = failed_at ? *failed_at : step_unused;
   step = SessionStep::kSettings;
   VXR_ASSIGN_OR_RETURN(const SessionFlags flags, complete_session_flags(given_flags));
   VXR_ASSIGN_OR_RETURN(SettingsChoice choice, choose_settings(flags));
-  if (choice.settings.clip.cut || choice.settings.clip.roi)
-    return invalid_argument("the settings' clip (cut plane or box) is drawn by the out-of-core renderer; drop --renderer "
-                            "dense");
-  if (o.renderer != DenseRenderer::kReference && !gpu) return invalid_argument("the dense GPU ray caster needs a GPU");
   step = SessionStep::kSource;
   VXR_ASSIGN_OR_RETURN(LoadedVolume loaded, load_for_render(input, o.max_dim, uint64_t(1) << 30));
-  DenseStill out;
+  ReferenceStill out;
   out.notes = loaded.notes;
   out.shrink = loaded.shrink;
   step = SessionStep::kChannels;
@@ -150,19 +152,13 @@ Result<DenseStill> render_still_dense(gpu::Context* gpu, const std::string& inpu
   VXR_ASSIGN_OR_RETURN(out.camera, camera_for(placement, picked[0].dims[2] == 1));
 
   const auto t0 = std::chrono::steady_clock::now();
-  ImageRgbaF image;
-  if (o.renderer == DenseRenderer::kReference) {
-    VXR_ASSIGN_OR_RETURN(image, render_reference(picked, out.camera, out.settings, o.width, o.height, {o.reference_step, 0}));
-  } else {
-    VXR_ASSIGN_OR_RETURN(std::unique_ptr<Raycaster> caster, Raycaster::create(*gpu));
-    VXR_RETURN_IF_ERROR(caster->set_channels(picked));
-    VXR_ASSIGN_OR_RETURN(image, caster->render_float(out.camera, out.settings, o.width, o.height,
-                                                     o.renderer == DenseRenderer::kFragment ? RenderPath::kFragment
-                                                                                            : RenderPath::kCompute));
-  }
+  const std::array<uint64_t, 3> dims{picked[0].dims[0], picked[0].dims[1], picked[0].dims[2]};
+  VXR_ASSIGN_OR_RETURN(ImageRgbaF image,
+                       render_reference(picked, out.camera, out.settings, o.width, o.height,
+                                        clipped_reference(out.settings, dims, o.reference_step)));
   out.ms = ms_since(t0);
   out.image = to_rgba8(image);
-  // The dense renderer keeps no counters: the samples are counted from the rays, before early termination.
+  // The reference keeps no counters: the samples are counted from the rays, before early termination.
   out.sample_bound = dense_sample_count(out.camera, placement, out.settings.step_voxels, o.width, o.height);
   return out;
 }

@@ -57,21 +57,18 @@ struct StillResult {
 Result<StillResult> render_still(gpu::Context& gpu, const VolumeSession& session, const Camera& camera,
                                  const StillOptions& options);
 
-// The comparison renderers of `vxr render --renderer dense` / `--reference`:
-// the whole volume read (averaged down to at most `max_dim` per side),
-// timepoint 0, the settings choose_settings + resolve_drawn_settings give
-// (as the session's, with windows from the volume read), drawn once by the
-// dense GPU ray caster (compute or fragment path) or the CPU reference.
-enum class DenseRenderer { kCompute, kFragment, kReference };
-
-struct DenseStillOptions {
+// The CPU reference picture of `vxr render --reference`: the whole volume
+// read (averaged down to at most `max_dim` per side), timepoint 0, the
+// settings choose_settings + resolve_drawn_settings give (as the session's,
+// with windows from the volume read), drawn once in double precision
+// (render/reference_renderer.h), clipped by the settings' cut plane and box.
+struct ReferenceStillOptions {
   uint32_t width = 512, height = 512;
-  DenseRenderer renderer = DenseRenderer::kCompute;
   double reference_step = 1.0 / 16.0;  // the CPU reference's step in voxels
-  uint32_t max_dim = 2048;             // the GPU's 3D image limit
+  uint32_t max_dim = 2048;             // what is read, per side
 };
 
-struct DenseStill {
+struct ReferenceStill {
   ImageRgba8 image;  // premultiplied alpha
   RenderSettings settings;
   std::vector<uint32_t> channels;  // the source channels drawn
@@ -85,9 +82,9 @@ struct DenseStill {
 // The camera for a volume's placement (`flat`: a single slice).
 using CameraChooser = std::function<Result<Camera>(const VolumePlacement& placement, bool flat)>;
 
-// `gpu` may be null for the CPU reference. `failed_at` as open_volume_session's.
-Result<DenseStill> render_still_dense(gpu::Context* gpu, const std::string& input, const SessionFlags& flags,
-                                      const CameraChooser& camera_for, const DenseStillOptions& options,
-                                      SessionStep* failed_at = nullptr);
+// `failed_at` as open_volume_session's.
+Result<ReferenceStill> render_still_reference(const std::string& input, const SessionFlags& flags,
+                                              const CameraChooser& camera_for, const ReferenceStillOptions& options,
+                                              SessionStep* failed_at = nullptr);
 
 }  // namespace vxr

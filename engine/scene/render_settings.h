@@ -138,8 +138,11 @@ struct Scene {
   CameraState camera;  // the user's pose (eye, target, up) in world units
   bool has_camera = false;  // false: the viewer picks a default view
   std::array<uint32_t, 2> viewport{0, 0};  // image width, height in pixels; 0: the viewer's size
-  std::string renderer;  // "lod", "dense" or "" (the default for the input)
-  std::string path;      // dense renderer's "compute" or "fragment"; "" = compute
+  // What drew a card's snapshot: "lod" (the one renderer), or "dense"/"compute"/
+  // "fragment" in cards made before the dense ray caster was removed (such a
+  // card is drawn out of core now). Kept so old cards still read.
+  std::string renderer;
+  std::string path;
   double lod_bias = 0.0;  // lod renderer: log2 voxels per pixel accepted
   std::string annotations;  // annotation store drawn with the volume (absolute path); "": none or the project's
   RenderSettings render;

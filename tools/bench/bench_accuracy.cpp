@@ -1,6 +1,9 @@
-// `vxr bench accuracy`: run time against error for the ray caster's speed
+// `vxr bench accuracy`: run time against error for the renderer's speed
 // settings, on real datasets from several views, against the CPU
-// double-precision reference (step 1/16 voxel, no early termination).
+// double-precision reference (step 1/16 voxel, no early termination). Every
+// variant is drawn by the one renderer: the volume in memory at full
+// resolution (render/lod/memory_volume.h), or a .vxc of it at a LOD bias.
+// (Lens-warp error: `vxr bench xr`.)
 //
 // Every point is one setting; its time is the sum over all scenes (dataset x
 // view) of the median wall time of a render, repeats interleaved across
@@ -23,13 +26,12 @@
 #include "bench/roofline.h"
 #include "core/image.h"
 #include "render/lod/brick_renderer.h"
-#include "render/raycaster.h"
+#include "render/lod/memory_volume.h"
 #include "render/reference_renderer.h"
 #include "volume/container_reader.h"
 #include "volume/load_dense.h"
 #include "volume/memory_slab_source.h"
 #include "volume/pyramid_builder.h"
-#include "xr/lens_warp.h"
 
 namespace vxr::bench {
 namespace {
@@ -41,6 +43,7 @@ struct Dataset {
   // The same voxels as a .vxc pyramid, drawn by the out-of-core renderer.
   std::unique_ptr<ContainerReader> container;
   std::unique_ptr<BrickRenderer> bricks;
+  std::unique_ptr<MemoryVolumeRenderer> full;  // the same voxels in memory, always level 0
 };
 
 struct View {
@@ -50,10 +53,8 @@ struct View {
 
 struct Variant {
   std::string name;
-  std::string family;  // "step x termination", "naive opacity", "fragment path", "lens warp", ...
+  std::string family;  // "step x termination", "naive opacity", "LOD bias", ...
   RenderSettings settings;
-  RenderPath path = RenderPath::kCompute;
-  xr::LensWarp warp;
   std::optional<double> lod_bias;  // set: the out-of-core brick renderer at this LOD bias
   bool is_default = false;
 };
@@ -78,13 +79,9 @@ Status attach_container(gpu::Context& ctx, Dataset& ds, const std::string& path)
   return Status::ok();
 }
 
-// Camera with a symmetric frustum equal to its fov (the lens-warped path needs one).
-Camera view_camera(const DenseVolume& v, const View& view, uint32_t w, uint32_t h) {
+Camera view_camera(const DenseVolume& v, const View& view) {
   const VolumePlacement p{v.dims, v.voxel_size};
-  Camera c = orbit_camera(p, view.azimuth, view.elevation, view.distance, 40.0);
-  const double ty = std::tan(glm::radians(c.fov_y_deg) * 0.5), tx = ty * double(w) / double(h);
-  c.frustum = FrustumTangents{-tx, tx, -ty, ty};
-  return c;
+  return orbit_camera(p, view.azimuth, view.elevation, view.distance, 40.0);
 }
 
 uint64_t count_samples(const Camera& cam, const DenseVolume& v, uint32_t w, uint32_t h, double step) {
@@ -124,7 +121,7 @@ std::vector<Variant> make_variants(bool quick) {
       v.settings = defaults;
       v.settings.step_voxels = st;
       v.settings.early_termination = et;
-      v.family = "step x termination (compute)";
+      v.family = "step x termination";
       v.name = "step " + label(st) + ", term " + label(et);
       v.is_default = st == defaults.step_voxels && et == defaults.early_termination;
       out.push_back(v);
@@ -138,29 +135,12 @@ std::vector<Variant> make_variants(bool quick) {
     v.name = "naive, step " + label(st);
     out.push_back(v);
   }
-  for (double st : quick ? std::vector<double>{0.5} : std::vector<double>{1.0, 0.5, 0.25}) {
-    Variant v;
-    v.settings = defaults;
-    v.settings.step_voxels = st;
-    v.path = RenderPath::kFragment;
-    v.family = "fragment path";
-    v.name = "fragment, step " + label(st);
-    out.push_back(v);
-  }
   for (double bias : quick ? std::vector<double>{0.0} : std::vector<double>{-1.0, 0.0, 1.0, 2.0}) {
     Variant v;
     v.settings = defaults;
     v.lod_bias = bias;
     v.family = "out-of-core LOD bias (brick renderer)";
     v.name = "lod bias " + label(bias);
-    out.push_back(v);
-  }
-  for (uint32_t ps : quick ? std::vector<uint32_t>{2} : std::vector<uint32_t>{2, 3, 4}) {
-    Variant v;
-    v.settings = defaults;
-    v.warp = xr::LensWarp{true, 0.5, ps};
-    v.family = "lens warp (periphery 1 ray per N px)";
-    v.name = "lens warp " + std::to_string(ps);
     out.push_back(v);
   }
   return out;
@@ -208,21 +188,19 @@ int run(const Options& o) {
   std::vector<Variant> variants = make_variants(o.quick);
   const uint32_t w = o.size, h = o.size;
 
-  auto caster_r = Raycaster::create(ctx);
-  if (!caster_r) return cli::fail(caster_r.status());
-  Raycaster& caster = **caster_r;
-
   // results[variant][scene]
   const size_t scenes = datasets.size() * views.size();
   std::vector<std::vector<SceneResult>> results(variants.size(), std::vector<SceneResult>(scenes));
   nlohmann::json scene_info = nlohmann::json::array();
   double reference_ms = 0.0;
   for (size_t di = 0; di < datasets.size(); ++di) {
-    const Dataset& ds = datasets[di];
-    if (Status s = caster.set_volume(ds.volume); !s) return cli::fail(s);
+    Dataset& ds = datasets[di];
+    auto full = MemoryVolumeRenderer::create(ctx, {ds.volume});
+    if (!full) return cli::fail(full.status());
+    ds.full = std::move(full).value();
     for (size_t vi = 0; vi < views.size(); ++vi) {
       const size_t si = di * views.size() + vi;
-      const Camera cam = view_camera(ds.volume, views[vi], w, h);
+      const Camera cam = view_camera(ds.volume, views[vi]);
       // The reference: exact exponentials, step 1/16, no early termination.
       RenderSettings ref_settings = ds.base;
       ref_settings.early_termination = 0.0;
@@ -254,12 +232,7 @@ int run(const Options& o) {
             if (i > 100) return internal_error("bench accuracy: the LOD view did not converge in 100 frames");
           }
         }
-        if (v.warp.enabled) {
-          VXR_ASSIGN_OR_RETURN(ImageRgba8 img, xr::render_lens_warped(caster, cam, s, w, h, v.warp));
-          if (out) *out = from_rgba8(img);
-          return Status::ok();
-        }
-        VXR_ASSIGN_OR_RETURN(ImageRgbaF img, caster.render_float(cam, s, w, h, v.path));
+        VXR_ASSIGN_OR_RETURN(ImageRgbaF img, ds.full->render_float(cam, s, w, h));
         if (out) *out = std::move(img);
         return Status::ok();
       };
@@ -308,8 +281,6 @@ int run(const Options& o) {
                       {"step_voxels", s.step_voxels},
                       {"early_termination", s.early_termination},
                       {"opacity_correction", s.opacity_correction},
-                      {"path", variants[k].path == RenderPath::kCompute ? "compute" : "fragment"},
-                      {"lens_warp_periphery_step", variants[k].warp.enabled ? variants[k].warp.periphery_step : 1},
                       {"lod_bias", variants[k].lod_bias ? nlohmann::json(*variants[k].lod_bias) : nlohmann::json()},
                       {"default", variants[k].is_default},
                       {"ms", ms},
@@ -357,16 +328,24 @@ int run(const Options& o) {
     Variant v = variants[default_index];
     v.settings.early_termination = 0.0;
     const Dataset& ds = datasets[0];
-    if (Status s = caster.set_volume(ds.volume); !s) return cli::fail(s);
-    const Camera cam = view_camera(ds.volume, views[0], 256, 256);
+    const Camera cam = view_camera(ds.volume, views[0]);
     Status err;
-    const double ms = median_ms(o.common.repeats, [&] { return caster.render_float(cam, v.settings, 256, 256).status(); }, &err);
+    BrickFrameStats st;
+    std::vector<double> gpu_ms;
+    const double ms = median_ms(
+        o.common.repeats,
+        [&] {
+          Status s = ds.full->render_float(cam, v.settings, 256, 256, {}, &st).status();
+          gpu_ms.push_back(st.gpu_ms);
+          return s;
+        },
+        &err);
     if (!err.is_ok()) return cli::fail(err);
-    const uint64_t samples = count_samples(cam, ds.volume, 256, 256, v.settings.step_voxels);
-    const double rate = samples / (ms * 1e-3);
+    const uint64_t samples = st.samples;  // the shader's count (no early termination; empty space skipped)
+    const double rate = samples / (ms * 1e-3), gpu = median(gpu_ms);
     doc["roofline"] = {{"scene", ds.name + ", " + views[0].name + ", 256x256, default step, no early termination"},
                        {"ms", ms},
-                       {"gpu_ms", caster.last_gpu_ms()},
+                       {"gpu_ms", gpu},
                        {"samples", samples},
                        {"samples_per_s", rate},
                        {"trilinear_ceiling_samples_per_s", roof->trilinear_samples_per_s},
@@ -374,17 +353,15 @@ int run(const Options& o) {
                        {"roofline_ratio", rate / roof->trilinear_samples_per_s},
                        // The same on GPU time alone (no submit/readback): what the shader
                        // achieves once a frame is big enough to hide the fixed costs.
-                       {"roofline_ratio_gpu_time", caster.last_gpu_ms() > 0
-                                                       ? samples / (caster.last_gpu_ms() * 1e-3) /
-                                                             roof->trilinear_samples_per_s
-                                                       : 0.0}};
+                       {"roofline_ratio_gpu_time",
+                        gpu > 0 ? samples / (gpu * 1e-3) / roof->trilinear_samples_per_s : 0.0}};
     std::fprintf(stderr, "accuracy: default step %.0f M samples/s = %.2f of the %.0f M/s trilinear ceiling\n",
                  rate / 1e6, rate / roof->trilinear_samples_per_s, roof->trilinear_samples_per_s / 1e6);
   }
 
   // The plot: each family its own colour, the front as a line, the default ringed.
   PlotSpec plot;
-  plot.title = "ray caster: time vs error against the CPU double reference";
+  plot.title = "renderer: time vs error against the CPU double reference";
   plot.x_label = "time, ms (sum over " + std::to_string(scenes) + " scenes)";
   plot.y_label = "RMSE (8-bit units)";
   plot.log_x = true;

@@ -23,7 +23,6 @@
 #include "bench.h"
 #include "core/progress.h"
 #include "render/lod/brick_renderer.h"
-#include "render/raycaster.h"
 #include "render/reference_renderer.h"
 #include "render/volume_session.h"
 #include "volume/container_reader.h"

@@ -26,8 +26,6 @@ void add_stability_bench(CLI::App& bench, cli::Invocation& inv) {
     inv.run = [opt, cases, seed, first] {
       auto gpu = cli::open_gpu();
       if (!gpu) return cli::fail(gpu.status());
-      auto caster = Raycaster::create(**gpu);
-      if (!caster) return cli::fail(caster.status());
 
       const auto& classes = stability_classes();
       struct Tally {
@@ -45,7 +43,7 @@ void add_stability_bench(CLI::App& bench, cli::Invocation& inv) {
       for (uint32_t k = 0; k < *cases; ++k) {
         const uint32_t index = *first + k;
         const StabilityCase c = make_stability_case(*seed, index);
-        const CaseOutcome o = run_stability_case(**caster, c);
+        const CaseOutcome o = run_stability_case(**gpu, c);
         Tally& t = tally[c.class_index];
         ++t.cases;
         t.worst = std::max(t.worst, o.max_abs);

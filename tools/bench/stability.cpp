@@ -9,6 +9,7 @@
 #include <span>
 
 #include "render/colormap.h"
+#include "render/lod/memory_volume.h"
 #include "render/reference_renderer.h"
 
 namespace vxr::bench {
@@ -453,15 +454,17 @@ double case_bound(const StabilityCase& c) {
   return std::min(1.0, err);
 }
 
-CaseOutcome run_stability_case(Raycaster& caster, const StabilityCase& c) {
+CaseOutcome run_stability_case(gpu::Context& ctx, const StabilityCase& c) {
   CaseOutcome out;
   const StabilityClass& cls = stability_classes()[c.class_index];
   out.bound = c.expect_rejection ? 0.0 : case_bound(c);
-  const Status loaded = caster.set_volume(c.volume);
+  auto renderer = MemoryVolumeRenderer::create(ctx, {c.volume});
+  const Status loaded = renderer.status();
   std::span<const DenseVolume> one(&c.volume, 1);
   ReferenceOptions ro;
   ro.step_voxels = c.settings.step_voxels;
   ro.threads = 1;
+  ro.grid_from_eye = true;  // the brick renderer's samples
   if (c.expect_rejection) {
     auto ref = render_reference(one, c.camera, c.settings, c.width, c.height, ro);
     if (loaded.code() != ErrorCode::kInvalidArgument || ref.status().code() != ErrorCode::kInvalidArgument) {
@@ -476,7 +479,7 @@ CaseOutcome run_stability_case(Raycaster& caster, const StabilityCase& c) {
     out.failure = "set_volume: " + loaded.to_string();
     return out;
   }
-  auto gpu = caster.render_float(c.camera, c.settings, c.width, c.height);
+  auto gpu = (*renderer)->render_float(c.camera, c.settings, c.width, c.height);
   if (!gpu) {
     out.failure = "GPU render: " + gpu.status().to_string();
     return out;

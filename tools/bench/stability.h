@@ -6,10 +6,11 @@
 // NaN/Inf voxels, constant data, extreme transfer functions, steps from 1/64
 // to 8 voxels).
 //
-// Each case is rendered by the GPU ray caster into RGBA32F and by the CPU
-// double-precision reference at the same step (same sample positions, so the
-// difference is the GPU's float arithmetic and texture filtering, not the
-// discretisation); it passes when no output channel is NaN or Inf and the
+// Each case is rendered by the one renderer (the brick renderer over the
+// case's volume in memory, render/lod/memory_volume.h) into RGBA32F and by the
+// CPU double-precision reference at the same step on the same eye-anchored
+// grid (same sample positions, so the difference is the GPU's float
+// arithmetic and texture filtering, not the discretisation); it passes when no output channel is NaN or Inf and the
 // max-abs difference is within its class's bound.
 #pragma once
 
@@ -19,7 +20,8 @@
 
 #include "core/status.h"
 #include "render/camera.h"
-#include "render/raycaster.h"
+#include "core/image.h"
+#include "gpu/context.h"
 #include "scene/render_settings.h"
 #include "volume/dense_volume.h"
 
@@ -78,9 +80,9 @@ double case_bound(const StabilityCase& c);
 // case: the class bound times the colormap's steepest slope.
 double case_flip_tolerance(const StabilityCase& c);
 
-// Renders one case on `caster` (which it reloads with the case's volume) and
-// against the reference, and judges it.
-CaseOutcome run_stability_case(Raycaster& caster, const StabilityCase& c);
+// Renders one case on `ctx` (a renderer over the case's volume) and with the
+// reference, and judges it.
+CaseOutcome run_stability_case(gpu::Context& ctx, const StabilityCase& c);
 
 // Largest |a - b| over all channels; +inf if sizes differ or either is NaN.
 double max_abs_difference(const ImageRgbaF& a, const ImageRgbaF& b);

@@ -3,8 +3,8 @@
 // ChunkKey (channel 0; the key names the brick, every channel comes with it)
 // to atlas slot.
 //
-// Texel formats follow the dense ray caster's, so both sample the same
-// values: u8 R8_UNORM, u16 R16_UNORM, every other dtype (i8, i16, u32, i32,
+// Texel formats, the same for every source, so every path samples the same
+// values (the CPU reference normalises the same way): u8 R8_UNORM, u16 R16_UNORM, every other dtype (i8, i16, u32, i32,
 // f32) R32_SFLOAT in data units, converted while filling the staging ring.
 //
 // Apron: a slot holds the chunk with `apron` voxels around it. Gradients

@@ -323,7 +323,7 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
 }
 
 Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model) {
-  // Specialised like the dense ray caster's (raycast_core.glsl ids 100..105).
+  // Specialisation constants: raycast_core.glsl ids 100..105.
   const uint32_t n = channels();
   const bool gradient = s.gradient_opacity.enabled, depth = s.depth_color != DepthColorMode::kOff;
   bool gamma = false;
@@ -855,12 +855,50 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
                                          BrickFrameStats* stats_out, const UnderlayRecorder& underlay) {
   VXR_TRACE_SCOPE("brick_renderer.render");
   if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
+  VXR_RETURN_IF_ERROR(ensure_target(width, height));
+  VXR_RETURN_IF_ERROR(draw_and_wait(camera, s, frame,
+                                    {target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL},
+                                    stats_out, underlay));
+  ImageRgba8 img(width, height);
+  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, target_, img.pixels.data(), img.pixels.size()));
+  return img;
+}
+
+Result<ImageRgbaF> BrickRenderer::render_float(const Camera& camera, const RenderSettings& s,
+                                               const BrickFrameSettings& frame, uint32_t width, uint32_t height,
+                                               BrickFrameStats* stats_out, const UnderlayRecorder& underlay) {
+  VXR_TRACE_SCOPE("brick_renderer.render_float");
+  if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
+  VXR_RETURN_IF_ERROR(ensure_target(width, height));  // bound (unwritten) while the float target is drawn
+  if (!float_target_.image || float_target_.extent.width != width || float_target_.extent.height != height) {
+    if (float_target_.image) retired_.push_back(std::move(float_target_));
+    VXR_ASSIGN_OR_RETURN(float_target_,
+                         gpu::create_image(ctx_, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT, {width, height, 1},
+                                                  // storage: only so the image may have a view
+                                                  VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                                                      VK_IMAGE_USAGE_STORAGE_BIT,
+                                                  "brick raycast float target"}));
+    VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+      gpu::transition_image(cmd, float_target_, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                            VK_PIPELINE_STAGE_2_BLIT_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    }));
+  }
+  // Not RGBA8: the final float pixels are blitted (nearest, same size: copied exactly) into it.
+  VXR_RETURN_IF_ERROR(draw_and_wait(
+      camera, s, frame,
+      {float_target_.image, VK_NULL_HANDLE, float_target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL}, stats_out,
+      underlay));
+  ImageRgbaF img{width, height, std::vector<float>(size_t(width) * height * 4)};
+  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, float_target_, img.rgba.data(), img.rgba.size() * sizeof(float)));
+  return img;
+}
+
+Status BrickRenderer::draw_and_wait(const Camera& camera, const RenderSettings& s, const BrickFrameSettings& frame,
+                                    RenderTarget target, BrickFrameStats* stats_out, const UnderlayRecorder& underlay) {
   VXR_RETURN_IF_ERROR(check_brick_settings(s, channels()));
   VXR_RETURN_IF_ERROR(prepare(s));
-  VXR_RETURN_IF_ERROR(ensure_target(width, height));
   BrickFrameStats st;
   Status recorded = Status::ok();
-  RenderTarget target{target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL};
   const auto t0 = std::chrono::steady_clock::now();
   VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
     if (timestamps_) {
@@ -896,10 +934,8 @@ Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSetti
     st.bricks_uploaded = up.bricks;
     st.evicted = up.evicted;
   }
-  ImageRgba8 img(width, height);
-  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, target_, img.pixels.data(), img.pixels.size()));
   if (stats_out) *stats_out = st;
-  return img;
+  return Status::ok();
 }
 
 Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {

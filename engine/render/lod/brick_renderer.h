@@ -33,9 +33,10 @@
 // render_monolithic() is the comparison path: one level of the source as a
 // single 3D texture, drawn by the same shader as one brick.
 //
-// Classification and compositing are the dense ray caster's GLSL core
-// (shaders_glsl/include/raycast_core.glsl) with the same RaycastParams and
-// transfer table; see check_brick_settings for what the brick path draws.
+// Classification and compositing are the GLSL core
+// (shaders_glsl/include/raycast_core.glsl, RaycastParams, the transfer
+// table); see check_brick_settings for what it draws. Volumes already in
+// memory are its one-brick (or few-brick) case: render/lod/memory_volume.h.
 // The timepoint is the frame's (BrickFrameSettings::lod.timepoint, pinned by
 // begin_frame, so every view of a frame shares it); channels are the pool's
 // (BrickPoolOptions::channels).
@@ -56,7 +57,7 @@
 #include "render/camera.h"
 #include "render/lod/brick_pool.h"
 #include "render/lod/lod_traversal.h"
-#include "render/raycaster.h"
+#include "core/image.h"
 #include "render/transfer_function.h"
 #include "render/volume_renderer.h"
 #include "shared/raycast_params.h"
@@ -81,8 +82,8 @@ struct BrickRendererOptions {
   bool preload_if_fits = false;
 };
 
-// The brick shader classifies and composites with the dense ray caster's
-// core (raycast_core.glsl): every optical model (ea, emission, mip, minip,
+// The brick shader classifies and composites with the GLSL core
+// (raycast_core.glsl): every optical model (ea, emission, mip, minip,
 // average, iso), 1-4 channels (additive or composite), any transfer function,
 // gradient opacity, depth colour, any sample offset and per-pixel jitter (on
 // a step grid anchored at the eye, so bricks continue each other). Settings
@@ -142,6 +143,11 @@ class BrickRenderer final : public VolumeRenderer {
   Result<ImageRgba8> render(const Camera& camera, const RenderSettings& settings, const BrickFrameSettings& frame,
                             uint32_t width, uint32_t height, BrickFrameStats* stats = nullptr,
                             const UnderlayRecorder& underlay = {});
+  // The same frame before the rounding to 8 bits (numerics tests, error
+  // measurements): premultiplied RGBA floats.
+  Result<ImageRgbaF> render_float(const Camera& camera, const RenderSettings& settings,
+                                  const BrickFrameSettings& frame, uint32_t width, uint32_t height,
+                                  BrickFrameStats* stats = nullptr, const UnderlayRecorder& underlay = {});
 
   // Loads `level` of the source at `timepoint` into one 3D texture per drawn
   // channel (refused past the device's 3D image limit) for render_monolithic().
@@ -166,6 +172,9 @@ class BrickRenderer final : public VolumeRenderer {
  private:
   BrickRenderer(gpu::Context& ctx, const ChunkSource& src) : ctx_(ctx), src_(src) {}
   Status ensure_target(uint32_t width, uint32_t height);
+  // One frame of one view into `target`, submitted and waited for (render, render_float).
+  Status draw_and_wait(const Camera& camera, const RenderSettings& settings, const BrickFrameSettings& frame,
+                       RenderTarget target, BrickFrameStats* stats, const UnderlayRecorder& underlay);
   // The accumulation image holds at least width x height (rays' state between
   // passes, and final float pixels on their way to a blit).
   Status ensure_accum(uint32_t width, uint32_t height);
@@ -211,7 +220,7 @@ class BrickRenderer final : public VolumeRenderer {
   VkDescriptorSet mono_set_ = VK_NULL_HANDLE;
   std::vector<VkDescriptorSet> view_sets_;  // one per view of a frame
   gpu::Handle<VkSampler> linear_;
-  gpu::Image transfer_tex_, target_, accum_;
+  gpu::Image transfer_tex_, target_, float_target_, accum_;
   gpu::Image no_under_depth_, no_under_color_;  // 1x1, bound where a view has no underlay
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
