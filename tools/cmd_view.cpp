@@ -73,8 +73,8 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_flag("--no-ui", o->view.no_ui, "desktop: the bare window, without panels");
   cmd->add_option("--ui-script", o->view.ui_script,
                   "desktop: run this scripted session (JSON list of steps: viewer commands, play/pause, screenshot "
-                  "PATH, count, measure, tool, click, drag, finish, remove, card, keyframe, export-movie; see "
-                  "xr/desktop/ui_script.h), then close");
+                  "PATH, count, measure, tool, click, drag, finish, remove, card, panel-card, restore-card, keyframe, "
+                  "export-movie, and last, open PATH; see xr/desktop/ui_script.h), then close");
   add_annotations_option(cmd, o->view.flags.annotations);
   cmd->add_option("--tool", o->view.tool, "the right trigger's starting tool (headset, pose script; the menu button cycles)")
       ->check(CLI::IsMember({"count", "measure", "trace", "track", "roi"}));
