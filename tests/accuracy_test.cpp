@@ -324,11 +324,12 @@ TEST_CASE("accuracy: stress cases are deterministic and cover every class") {
 TEST_CASE("accuracy: 1,000 seeded stress cases: no NaN/Inf, every error within its class bound") {
   test::GpuTestScope scope;
   const auto& classes = bench::stability_classes();
+  const auto pipelines = std::make_shared<BrickPipelines>();  // compiled once for every case
   std::vector<uint32_t> per_class(classes.size(), 0);
   uint32_t failures = 0;
   for (uint32_t i = 0; i < 1000; ++i) {
     const auto c = bench::make_stability_case(1, i);
-    const auto o = bench::run_stability_case(test::gpu_context(), c);
+    const auto o = bench::run_stability_case(test::gpu_context(), c, pipelines);
     ++per_class[c.class_index];
     if (!o.passed) {
       ++failures;

@@ -27,6 +27,7 @@ void add_stability_bench(CLI::App& bench, cli::Invocation& inv) {
       auto gpu = cli::open_gpu();
       if (!gpu) return cli::fail(gpu.status());
 
+      const auto pipelines = std::make_shared<BrickPipelines>();  // compiled once for every case
       const auto& classes = stability_classes();
       struct Tally {
         uint32_t cases = 0, failures = 0;
@@ -43,7 +44,7 @@ void add_stability_bench(CLI::App& bench, cli::Invocation& inv) {
       for (uint32_t k = 0; k < *cases; ++k) {
         const uint32_t index = *first + k;
         const StabilityCase c = make_stability_case(*seed, index);
-        const CaseOutcome o = run_stability_case(**gpu, c);
+        const CaseOutcome o = run_stability_case(**gpu, c, pipelines);
         Tally& t = tally[c.class_index];
         ++t.cases;
         t.worst = std::max(t.worst, o.max_abs);

@@ -454,11 +454,12 @@ double case_bound(const StabilityCase& c) {
   return std::min(1.0, err);
 }
 
-CaseOutcome run_stability_case(gpu::Context& ctx, const StabilityCase& c) {
+CaseOutcome run_stability_case(gpu::Context& ctx, const StabilityCase& c,
+                               const std::shared_ptr<BrickPipelines>& pipelines) {
   CaseOutcome out;
   const StabilityClass& cls = stability_classes()[c.class_index];
   out.bound = c.expect_rejection ? 0.0 : case_bound(c);
-  auto renderer = MemoryVolumeRenderer::create(ctx, {c.volume});
+  auto renderer = MemoryVolumeRenderer::create(ctx, {c.volume}, 64, pipelines);
   const Status loaded = renderer.status();
   std::span<const DenseVolume> one(&c.volume, 1);
   ReferenceOptions ro;

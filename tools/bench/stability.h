@@ -22,6 +22,7 @@
 #include "render/camera.h"
 #include "core/image.h"
 #include "gpu/context.h"
+#include "render/lod/brick_renderer.h"
 #include "scene/render_settings.h"
 #include "volume/dense_volume.h"
 
@@ -80,9 +81,10 @@ double case_bound(const StabilityCase& c);
 // case: the class bound times the colormap's steepest slope.
 double case_flip_tolerance(const StabilityCase& c);
 
-// Renders one case on `ctx` (a renderer over the case's volume) and with the
-// reference, and judges it.
-CaseOutcome run_stability_case(gpu::Context& ctx, const StabilityCase& c);
+// Renders one case on `ctx` (a renderer over the case's volume, with
+// `pipelines` shared across cases) and with the reference, and judges it.
+CaseOutcome run_stability_case(gpu::Context& ctx, const StabilityCase& c,
+                               const std::shared_ptr<BrickPipelines>& pipelines = nullptr);
 
 // Largest |a - b| over all channels; +inf if sizes differ or either is NaN.
 double max_abs_difference(const ImageRgbaF& a, const ImageRgbaF& b);

@@ -168,14 +168,13 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->pool_, BrickPool::create(ctx, source, options.pool));
   r->value_scales_.assign(r->pool_->channels(), brick_value_scale(source.info().dtype));
   const auto b = bindings();
-  VXR_ASSIGN_OR_RETURN(r->pipeline_,
-                       gpu::create_compute_pipeline(ctx, {"brick_raycast.comp", b, sizeof(shader::BrickCastParams),
-                                                          {{100, VXR_MODEL_EMISSION_ABSORPTION}, {104, 0}, {105, 0}}}));
+  r->pipes_ = options.pipelines ? options.pipelines : std::make_shared<BrickPipelines>();
+  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant(VXR_MODEL_EMISSION_ABSORPTION, 1, false, false, false, false));
   if (options.max_views == 0) return invalid_argument("brick renderer: max_views must be at least 1");
   VXR_ASSIGN_OR_RETURN(r->desc_pool_, gpu::create_descriptor_pool(ctx, b, options.max_views + 1));
-  VXR_ASSIGN_OR_RETURN(r->mono_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_.set_layout));
+  VXR_ASSIGN_OR_RETURN(r->mono_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_->set_layout));
   for (uint32_t i = 0; i < options.max_views; ++i) {
-    VXR_ASSIGN_OR_RETURN(VkDescriptorSet set, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_.set_layout));
+    VXR_ASSIGN_OR_RETURN(VkDescriptorSet set, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_->set_layout));
     r->view_sets_.push_back(set);
   }
   VXR_ASSIGN_OR_RETURN(r->linear_, gpu::create_linear_clamp_sampler(ctx));
@@ -329,10 +328,15 @@ Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSett
   bool gamma = false;
   for (uint32_t c = 0; c < n && c < s.channels.size(); ++c) gamma = gamma || s.channels[c].gamma != 1.0;
   const bool naive = !s.opacity_correction;
-  if (model == VXR_MODEL_EMISSION_ABSORPTION && n == 1 && !gradient && !depth && !gamma && !naive) return &pipeline_;
+  return variant(model, n, gradient, depth, gamma, naive);
+}
+
+Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint32_t n, bool gradient, bool depth,
+                                                           bool gamma, bool naive) {
   const uint32_t key = model | (n << 4) | (gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u) |
                        (gamma ? 1u << 10 : 0u) | (naive ? 1u << 11 : 0u);
-  if (auto it = pipelines_.find(key); it != pipelines_.end()) return &it->second;
+  std::map<uint32_t, gpu::ComputePipeline>& variants = pipes_->variants;
+  if (auto it = variants.find(key); it != variants.end()) return &it->second;
   VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p,
                        gpu::create_compute_pipeline(ctx_, {"brick_raycast.comp", bindings(), sizeof(shader::BrickCastParams),
                                                            {{100, model},
@@ -341,7 +345,7 @@ Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSett
                                                             {103, depth ? 1u : 0u},
                                                             {104, gamma ? 1u : 0u},
                                                             {105, naive ? 1u : 0u}}}));
-  return &pipelines_.emplace(key, std::move(p)).first->second;
+  return &variants.emplace(key, std::move(p)).first->second;
 }
 
 std::vector<const gpu::Image*> BrickRenderer::pool_atlases() const {

@@ -65,6 +65,14 @@
 
 namespace vxr {
 
+// Compiled variants of the brick shader (keyed by model, channel count and
+// features, as BrickRenderer builds them). Renderers on one gpu::Context may
+// share them: lavapipe compiles each variant on the CPU, which dominates
+// creating a renderer for a small volume (tests, the stability suite).
+struct BrickPipelines {
+  std::map<uint32_t, gpu::ComputePipeline> variants;
+};
+
 struct BrickRendererOptions {
   BrickPoolOptions pool;
   uint32_t max_bricks = 16384;         // brick-table capacity per frame (all views together)
@@ -80,6 +88,9 @@ struct BrickRendererOptions {
   // fits in half the pool, upload and pin them all at create(), so every
   // frame draws at full detail from the first (and deterministically).
   bool preload_if_fits = false;
+  // Shared with other renderers on the same context (they must outlive none
+  // of its frames); null: this renderer's own.
+  std::shared_ptr<BrickPipelines> pipelines;
 };
 
 // The brick shader classifies and composites with the GLSL core
@@ -190,6 +201,9 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<const gpu::Image*> pool_atlases() const;
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels, features).
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model);
+  // The variant for these specialisation constants, built on first use.
+  Result<const gpu::ComputePipeline*> variant(uint32_t model, uint32_t channels, bool gradient, bool depth, bool gamma,
+                                              bool naive);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in texels).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
                    const LodSettings& clip) const;
@@ -214,8 +228,9 @@ class BrickRenderer final : public VolumeRenderer {
   const ChunkSource& src_;
   BrickRendererOptions opt_;
   std::unique_ptr<BrickPool> pool_;
-  gpu::ComputePipeline pipeline_;  // emission-absorption, one channel; its set layout is the sets'
-  std::map<uint32_t, gpu::ComputePipeline> pipelines_;  // other variants, keyed as in pipeline_for
+  std::shared_ptr<BrickPipelines> pipes_;
+  const gpu::ComputePipeline* pipeline_ = nullptr;  // emission-absorption, one channel; its set layout is the sets'
+
   gpu::Handle<VkDescriptorPool> desc_pool_;
   VkDescriptorSet mono_set_ = VK_NULL_HANDLE;
   std::vector<VkDescriptorSet> view_sets_;  // one per view of a frame

@@ -6,13 +6,15 @@ namespace vxr {
 
 Result<std::unique_ptr<MemoryVolumeRenderer>> MemoryVolumeRenderer::create(gpu::Context& ctx,
                                                                            std::vector<DenseVolume> channels,
-                                                                           uint32_t chunk_size) {
+                                                                           uint32_t chunk_size,
+                                                                           std::shared_ptr<BrickPipelines> pipelines) {
   if (channels.empty() || channels.size() > 4) return invalid_argument("a volume in memory has 1 to 4 channels");
   std::unique_ptr<MemoryVolumeRenderer> r(new MemoryVolumeRenderer());
   r->origin_ = {channels[0].origin[0], channels[0].origin[1], channels[0].origin[2]};
   VXR_ASSIGN_OR_RETURN(r->source_, DenseChunkSource::create(std::move(channels), chunk_size));
   BrickRendererOptions o;
   o.preload_if_fits = true;  // every brick resident from the first frame: deterministic
+  o.pipelines = std::move(pipelines);
   // Atlases sized to the volume (every chunk of every level, twice over, at
   // 4 bytes a texel), not the streaming default of 1 GiB.
   uint64_t chunks = 0;

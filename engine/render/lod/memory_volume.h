@@ -19,9 +19,12 @@ namespace vxr {
 class MemoryVolumeRenderer {
  public:
   // 1-4 channels of the same dims and dtype. `chunk_size`: brick edge in
-  // voxels (64: one brick for volumes up to 64 per side).
+  // voxels (64: one brick for volumes up to 64 per side). `pipelines`:
+  // compiled shader variants shared with other renderers on `ctx` (many
+  // small volumes in a row), or null.
   static Result<std::unique_ptr<MemoryVolumeRenderer>> create(gpu::Context& ctx, std::vector<DenseVolume> channels,
-                                                              uint32_t chunk_size = 64);
+                                                              uint32_t chunk_size = 64,
+                                                              std::shared_ptr<BrickPipelines> pipelines = nullptr);
 
   // One converged frame (every brick of level 0 drawn). `frame`'s LOD level
   // is forced to 0; its clip, pass mode and skipping are used as given.
