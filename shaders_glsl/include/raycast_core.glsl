@@ -49,10 +49,18 @@ layout(constant_id = 105) const bool VXR_SC_NAIVE_OPACITY = true;  // control2.z
 // Table lookup with the interpolation done here (texelFetch + mix), so the CPU
 // reference can repeat it exactly: entry i sits at x = i / (VXR_TF_SIZE - 1).
 // Row `channel` of `tf` (VXR_TF_SIZE x VXR_MAX_CHANNELS, RGBA32F).
-vec4 vxr_transfer_table(sampler2D tf, int channel, float x) {
+// vxr_transfer_index gives the entries (i, i + 1) and the weight f of i + 1,
+// for tables held elsewhere (a buffer).
+void vxr_transfer_index(float x, out int i, out float f) {
   float u = clamp(x, 0.0, 1.0) * float(VXR_TF_SIZE - 1);
-  int i = min(int(u), VXR_TF_SIZE - 2);
-  float f = u - float(i);
+  i = min(int(u), VXR_TF_SIZE - 2);
+  f = u - float(i);
+}
+
+vec4 vxr_transfer_table(sampler2D tf, int channel, float x) {
+  int i;
+  float f;
+  vxr_transfer_index(x, i, f);
   return mix(texelFetch(tf, ivec2(i, channel), 0), texelFetch(tf, ivec2(i + 1, channel), 0), f);
 }
 

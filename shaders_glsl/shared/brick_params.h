@@ -21,6 +21,9 @@ using uvec4 = glm::uvec4;
 #define VXR_BRICK_QUANTIZE 64u    // final pixel rounded to 8 bits, v * 255 + 0.5 (UNORM targets: the one rounding rule)
 #define VXR_BRICK_FINAL_FLOAT 128u  // final pixel into the accumulation image (float), for a blit into the target
 #define VXR_BRICK_UNDERLAY 256u   // rays end at the underlay's depth (binding 9); its colour (binding 10) goes under the volume
+// No rays: workgroup (x, y) classifies 64 empty-space cells (y * 64 ..) of brick control.z + x for
+// this view's settings into binding 11, which the rays' cell test then reads (one load per cell).
+#define VXR_BRICK_CLASSIFY 512u
 
 // One brick to march, everything in its own local voxels (level-l voxels,
 // origin at the brick's interior corner): the CPU computes these in double,
