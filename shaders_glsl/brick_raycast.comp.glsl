@@ -256,12 +256,16 @@ void main() {
     return;
   }
   const uint width = P.control.y, height = P.control.z;
-  uvec2 pix = gl_GlobalInvocationID.xy;
+  // Each run of 8 invocations (lavapipe's SIMD group) takes a 4x2 pixel
+  // block, not a row of 8: closer rays, which skip and end more alike.
+  const uint li = gl_LocalInvocationIndex;
+  const uvec2 local = uvec2((li & 3u) | ((li >> 1u) & 4u), ((li >> 2u) & 1u) | ((li >> 3u) & 6u));
+  uvec2 pix = gl_WorkGroupID.xy * 8u + local;
   uint first = p.control.z, last = p.control.z + p.control.w;
   const bool item_mode = (flags & VXR_BRICK_WORK_ITEMS) != 0u;
   if (item_mode) {
     const uvec4 item = items[p.pass.x + gl_WorkGroupID.x];
-    pix = item.yz + gl_LocalInvocationID.xy;
+    pix = item.yz + local;
     first = item.x;
     last = item.x + 1u;
   }
