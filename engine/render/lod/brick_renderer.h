@@ -24,7 +24,7 @@
 //
 // Empty space is skipped twice, with identical images: the traversal drops
 // bricks whose min/max maps to zero opacity (brick_may_contribute), and rays
-// jump the empty cells (~8^3 voxels, BrickCells) inside the bricks they march,
+// jump the empty cells (~4^3 voxels, BrickCells) inside the bricks they march,
 // on the same sample grid. LodSettings::skip_empty turns both off,
 // BrickFrameSettings::skip_cells the cells only (`vxr bench peer` measures).
 // Early ray termination: emission-absorption rays stop at transmittance
