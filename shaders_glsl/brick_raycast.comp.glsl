@@ -12,8 +12,8 @@
 // batched); see engine/render/lod/brick_renderer.h.
 //
 // Classification and compositing are the shared core's
-// (include/raycast_core.glsl: vxr_step, vxr_finish), with the same
-// RaycastParams the dense ray caster reads: every model, 1-4 channels,
+// (include/raycast_core.glsl: vxr_step, vxr_finish), with RaycastParams
+// (shared/raycast_params.h) and the CPU reference's rules: every model, 1-4 channels,
 // gradient opacity, depth colour. This file only decides where the samples
 // are and carries a ray's state between passes. Gradients (gradient opacity,
 // the isosurface normal) read +-1 voxel around a sample: the atlas slots carry
@@ -29,9 +29,11 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // One atlas per channel, all with the same slot layout (BrickPool); slots past
 // the volume's channel count are bound to channel 0's atlas and never read.
 layout(binding = 0) uniform sampler3D atlas_tex[VXR_MAX_CHANNELS];
-// VXR_TF_SIZE x (2 * VXR_MAX_CHANNELS) RGBA32F: rows 0..3 the transfer table
-// per channel, rows 4..7 in .r the count of entries 0..i with non-zero opacity.
-layout(binding = 1) uniform sampler2D transfer_tex;
+// 2 * VXR_MAX_CHANNELS rows of VXR_TF_SIZE entries: rows 0..3 the transfer
+// table per channel, rows 4..7 in .x the count of entries 0..i with non-zero
+// opacity. A buffer, not a texture: on lavapipe a texelFetch goes through the
+// sampler's code, a buffer load is one load (the same floats either way).
+layout(std430, binding = 1) readonly buffer Transfer { vec4 transfer_table[]; };
 layout(binding = 2, rgba8) uniform writeonly image2D out_image;
 layout(binding = 3, rgba32f) uniform image2D accum_image;
 layout(std430, binding = 4) readonly buffer Bricks { BrickRecord bricks[]; };
@@ -45,6 +47,9 @@ layout(std430, binding = 8) readonly buffer Cells { vec2 cell_range[]; };
 // its view depth; its premultiplied colour goes under the volume.
 layout(binding = 9, r32f) uniform readonly image2D under_depth;
 layout(binding = 10, rgba8) uniform readonly image2D under_color;
+// Per atlas slot and channel (cell_range's layout), each cell classified for
+// this view's settings by a VXR_BRICK_CLASSIFY pass: see cell_key.
+layout(std430, binding = 11) buffer CellKeys { float cell_keys[]; };
 
 layout(push_constant) uniform Push { BrickCastParams p; };
 
@@ -71,7 +76,13 @@ vec4 vxr_sample(vec3 pos) {
   return v;
 }
 
-vec4 vxr_transfer(int channel, float x) { return vxr_transfer_table(transfer_tex, channel, x); }
+vec4 vxr_transfer(int channel, float x) {
+  int i;
+  float f;
+  vxr_transfer_index(x, i, f);
+  const int row = channel * VXR_TF_SIZE + i;
+  return mix(transfer_table[row], transfer_table[row + 1], f);
+}
 
 // A ray's state between passes in one RGBA32F texel. The CPU sends only
 // variants whose state fits to the multipass waves (brick_state_fits_texel);
@@ -134,51 +145,75 @@ vec4 finish_ray(VxrRay r) {
 // with skipping off. The stored ranges cover every voxel a sample within half
 // a voxel of the cell filters, so rounding in a sample's position or in the
 // jump's exit is absorbed.
-float opaque_entries_upto(int c, int i) { return texelFetch(transfer_tex, ivec2(i, VXR_MAX_CHANNELS + c), 0).r; }
+float opaque_entries_upto(int c, int i) { return transfer_table[(VXR_MAX_CHANNELS + c) * VXR_TF_SIZE + i].x; }
+
+// What the cell test needs of a cell's range under the view's window and
+// transfer function, computed once per frame and cell (VXR_BRICK_CLASSIFY)
+// rather than per ray and cell. Per model, with x0, x1 the windowed ends:
+//   mip: x1 (plus a margin): the cell is empty for a ray whose maximum is at least that;
+//   minip: x0 (minus a margin): empty for a ray whose minimum is at most that;
+//   others: how many table entries the lookup can reach have non-zero opacity (0: empty).
+float cell_key(uint slot, int cell, int c) {
+  const uint m = VXR_SC_MODEL;
+  const uint count = p.pass.y * p.pass.y * p.pass.y;
+  const vec2 range = cell_range[(slot * uint(VXR_SC_CHANNELS) + uint(c)) * count + uint(cell)];
+  // Windowing (and gamma) is monotonic: the range's ends bound every sample's value.
+  const float x0 = vxr_normalise(P, vec4(range.x))[c], x1 = vxr_normalise(P, vec4(range.y))[c];
+  // MIP / MinIP: a gamma's pow may not be monotonic in the last ulp, so
+  // inside the window a bound must clear the running value by a margin;
+  // outside it (0 or 1 exactly) it is exact.
+  if (m == VXR_MODEL_MIP) return x1 + (VXR_SC_GAMMA && x1 > 0.0 ? 1e-5 : 0.0);
+  if (m == VXR_MODEL_MINIP) return x0 - (VXR_SC_GAMMA && x0 < 1.0 ? 1e-5 : 0.0);
+  // Every table entry the lookup can mix has zero opacity: a value at u = x * 255
+  // mixes entries floor(u) and, with a non-zero weight, floor(u) + 1, so the
+  // range's entries are floor(u0) .. ceil(u1) (x = 0 or 1 exactly, outside the
+  // window, reaches one entry). The stored range is wider than any sample's
+  // by far more than rounding; gamma's pow may not be monotonic in the last
+  // ulp: one entry more each side.
+  const float u0 = x0 * float(VXR_TF_SIZE - 1), u1 = x1 * float(VXR_TF_SIZE - 1);
+  const int pad = VXR_SC_GAMMA ? 1 : 0;
+  const int i0 = clamp(int(floor(u0)) - pad, 0, VXR_TF_SIZE - 1);
+  const int i1 = clamp(int(ceil(u1)) + pad, 0, VXR_TF_SIZE - 1);
+  return opaque_entries_upto(c, i1) - (i0 > 0 ? opaque_entries_upto(c, i0 - 1) : 0.0);
+}
+
+// The VXR_BRICK_CLASSIFY pass: cell_key of 64 cells of one brick's slot, every enabled channel.
+void classify_cells() {
+  const uint b = p.control.z + gl_WorkGroupID.x;
+  const uint count = p.pass.y * p.pass.y * p.pass.y;
+  const uint cell = gl_WorkGroupID.y * 64u + gl_LocalInvocationIndex;
+  if (b >= p.control.z + p.control.w || cell >= count || bricks[b].atlas.w < 0.0) return;
+  const uint slot = uint(bricks[b].atlas.w);
+  for (int c = 0; c < VXR_SC_CHANNELS; ++c)
+    if (P.window[c].w != 0.0) cell_keys[(slot * uint(VXR_SC_CHANNELS) + uint(c)) * count + cell] = cell_key(slot, int(cell), c);
+}
 
 bool cell_is_empty(uint slot, int cell, VxrRay r) {
   const uint m = VXR_SC_MODEL;
   const uint count = p.pass.y * p.pass.y * p.pass.y;
   for (int c = 0; c < VXR_SC_CHANNELS; ++c) {
     if (P.window[c].w == 0.0) continue;
-    const vec2 range = cell_range[(slot * uint(VXR_SC_CHANNELS) + uint(c)) * count + uint(cell)];
-    // Windowing (and gamma) is monotonic: the range's ends bound every sample's value.
-    const float x0 = vxr_normalise(P, vec4(range.x))[c], x1 = vxr_normalise(P, vec4(range.y))[c];
-    // MIP / MinIP: a gamma's pow may not be monotonic in the last ulp, so
-    // inside the window a bound must clear the running value by a margin;
-    // outside it (0 or 1 exactly) it is exact.
+    const float key = cell_keys[(slot * uint(VXR_SC_CHANNELS) + uint(c)) * count + uint(cell)];
     if (m == VXR_MODEL_MIP) {
       // Not above the running maximum: the maximum stays. Nothing taken yet: entry 0 must be clear.
-      const float margin = VXR_SC_GAMMA && x1 > 0.0 ? 1e-5 : 0.0;
-      if (!(x1 + margin <= r.reduce[c]) || (r.count == 0.0 && opaque_entries_upto(c, 0) > 0.0)) return false;
+      if (!(key <= r.reduce[c]) || (r.count == 0.0 && opaque_entries_upto(c, 0) > 0.0)) return false;
     } else if (m == VXR_MODEL_MINIP) {
-      const float margin = VXR_SC_GAMMA && x0 < 1.0 ? 1e-5 : 0.0;
-      if (!(x0 - margin >= r.reduce[c]) ||
+      if (!(key >= r.reduce[c]) ||
           (r.count == 0.0 && opaque_entries_upto(c, VXR_TF_SIZE - 1) - opaque_entries_upto(c, VXR_TF_SIZE - 2) > 0.0))
         return false;
-    } else {
-      // Every table entry the lookup can mix has zero opacity: a value at u = x * 255
-      // mixes entries floor(u) and, with a non-zero weight, floor(u) + 1, so the
-      // range's entries are floor(u0) .. ceil(u1) (x = 0 or 1 exactly, outside the
-      // window, reaches one entry). The stored range is wider than any sample's
-      // by far more than rounding; gamma's pow may not be monotonic in the last
-      // ulp: one entry more each side.
-      const float u0 = x0 * float(VXR_TF_SIZE - 1), u1 = x1 * float(VXR_TF_SIZE - 1);
-      const int pad = VXR_SC_GAMMA ? 1 : 0;
-      const int i0 = clamp(int(floor(u0)) - pad, 0, VXR_TF_SIZE - 1);
-      const int i1 = clamp(int(ceil(u1)) + pad, 0, VXR_TF_SIZE - 1);
-      if (opaque_entries_upto(c, i1) - (i0 > 0 ? opaque_entries_upto(c, i0 - 1) : 0.0) > 0.0) return false;
+    } else if (!(key <= 0.0)) {
+      return false;
     }
   }
   return true;
 }
 
-// Where the ray leaves cell `cell` grown by `grow` voxels, in t units.
-float cell_exit(ivec3 cell, vec3 e, vec3 dl, float grow) {
+// Where the ray leaves cell `cell` grown by `grow` voxels, in t units
+// (`inv`: 1 / the ray's direction in local voxels).
+float cell_exit(ivec3 cell, vec3 e, vec3 inv, float grow) {
   const float s = p.atlas_inv.w;
   const vec3 lo = vec3(cell) * s - grow, hi = vec3(cell + 1) * s + grow;
   // The ray is inside the box: a zero direction component gives +-inf, never 0 * inf.
-  const vec3 inv = 1.0 / dl;
   const vec3 tmax = max((lo - e) * inv, (hi - e) * inv);
   return min(min(tmax.x, tmax.y), tmax.z);
 }
@@ -227,13 +262,21 @@ float unwarp(float q, float edge, float n, float stride) {
 
 void main() {
   const uint flags = p.pass.z;
+  if ((flags & VXR_BRICK_CLASSIFY) != 0u) {
+    classify_cells();
+    return;
+  }
   const uint width = P.control.y, height = P.control.z;
-  uvec2 pix = gl_GlobalInvocationID.xy;
+  // Each run of 8 invocations (lavapipe's SIMD group) takes a 4x2 pixel
+  // block, not a row of 8: closer rays, which skip and end more alike.
+  const uint li = gl_LocalInvocationIndex;
+  const uvec2 local = uvec2((li & 3u) | ((li >> 1u) & 4u), ((li >> 2u) & 1u) | ((li >> 3u) & 6u));
+  uvec2 pix = gl_WorkGroupID.xy * 8u + local;
   uint first = p.control.z, last = p.control.z + p.control.w;
   const bool item_mode = (flags & VXR_BRICK_WORK_ITEMS) != 0u;
   if (item_mode) {
     const uvec4 item = items[p.pass.x + gl_WorkGroupID.x];
-    pix = item.yz + gl_LocalInvocationID.xy;
+    pix = item.yz + local;
     first = item.x;
     last = item.x + 1u;
   }
@@ -253,10 +296,10 @@ void main() {
   vec3 dir = normalize(raw_dir);
   g_dir = dir;
   const bool underlay = (flags & VXR_BRICK_UNDERLAY) != 0u;
-  // A view depth z lies at t = z * |raw_dir| (raw_dir has unit view depth), as in vxr_cast.
+  // A view depth z lies at t = z * |raw_dir| (raw_dir has unit view depth), as in the CPU reference.
   if (underlay) g_t_limit = imageLoad(under_depth, full_pix).r * length(raw_dir);
 
-  // Where samples sit in their step (P.march.w < 0: jitter), as in vxr_cast.
+  // Where samples sit in their step (P.march.w < 0: jitter), as in the CPU reference.
   const float offset = P.march.w < 0.0 ? vxr_jitter(uvec2(full_pix)) : P.march.w;
 
   float t0, t1;
@@ -286,25 +329,46 @@ void main() {
     // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture).
     const bool cells = p.pass.y != 0u && bricks[b].atlas.w >= 0.0;
     const uint slot = cells ? uint(bricks[b].atlas.w) : 0u;
-    // Samples before this t lie in a cell found occupied: marched without a test.
-    float occupied_until = -1.0;
-    for (int k = 0; k < n && !ray.done; ++k) {
+    const vec3 inv_dl = 1.0 / dl;
+    // Runs: a ray marches samples [k, run_end) without a test; where a run
+    // ends, it jumps the empty cells ahead and finds the next run's end by
+    // walking the occupied cells (cell tests only). The rays of a SIMD group
+    // (lavapipe runs 8 in lockstep) then pay for a walk only where one of
+    // them ends a run, not on nearly every sample as when each sample tested
+    // its own cell. MIP / MinIP runs are one cell: their test depends on the
+    // running value.
+    const bool extend = VXR_SC_MODEL != VXR_MODEL_MIP && VXR_SC_MODEL != VXR_MODEL_MINIP;
+    int k = 0, run_end = cells ? 0 : n;
+    while (k < n && !ray.done) {
+      if (k >= run_end) {
+        bool occupied = false;
+        int kk = k;
+        while (kk < n) {
+          // From the index: no drift.
+          const float t = (i0 + float(kk) + offset) * dt;
+          const ivec3 c3 = clamp(ivec3(floor((e + t * dl) / p.atlas_inv.w)), ivec3(0), ivec3(int(p.pass.y) - 1));
+          const int cell = (c3.z * int(p.pass.y) + c3.y) * int(p.pass.y) + c3.x;
+          if (cell_is_empty(slot, cell, ray)) {
+            if (occupied) break;  // the run ends here; its end jumps this cell
+            // The first sample at or past the exit of the cell grown by a quarter
+            // voxel; the ones before it lie within the half voxel its range covers.
+            kk = max(kk + 1, int(ceil(cell_exit(c3, e, inv_dl, 0.25) / dt - offset - i0)));
+            k = kk;
+          } else {
+            occupied = true;
+            // Taking samples is always right: no margin needed.
+            kk = max(kk + 1, int(ceil(cell_exit(c3, e, inv_dl, 0.0) / dt - offset - i0)));
+            if (!extend) break;
+          }
+        }
+        run_end = min(kk, n);
+        if (k >= n) break;
+      }
       // From the index: no drift. The segment is dt level-0 voxels long.
       const float t = (i0 + float(k) + offset) * dt;
-      if (cells && t >= occupied_until) {
-        const ivec3 c3 = clamp(ivec3(floor((e + t * dl) / p.atlas_inv.w)), ivec3(0), ivec3(int(p.pass.y) - 1));
-        const int cell = (c3.z * int(p.pass.y) + c3.y) * int(p.pass.y) + c3.x;
-        if (cell_is_empty(slot, cell, ray)) {
-          // The first sample at or past the exit of the cell grown by a quarter
-          // voxel; the ones before it lie within the half voxel its range covers.
-          const int next = int(ceil(cell_exit(c3, e, dl, 0.25) / dt - offset - i0));
-          k = max(k, next - 1);
-          continue;
-        }
-        occupied_until = cell_exit(c3, e, dl, 0.0);  // taking samples is always right: no margin needed
-      }
       vxr_step(ray, P, e, dl, t, dt);
       ++taken;
+      ++k;
       // The crossing's normal needs its brick's voxels: shade it now.
       if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
     }

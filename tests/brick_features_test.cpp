@@ -1,7 +1,7 @@
 // Every feature through the out-of-core BrickRenderer: each optical model,
 // multi-channel (additive and composite), a timepoint > 0, signed i8 data,
 // gradient opacity across brick seams, depth colour, cut plane + ROI. The
-// scenes are the dense ray caster's (tests/raycast_golden_test.cpp: the MRI
+// scenes are tests/raycast_golden_test.cpp's (the MRI
 // head, the four balls) imported to .vxc with 16^3 chunks, so brick seams
 // cross everything in view, plus real OME-TIFF files for i8, channels and
 // timepoints.

@@ -101,8 +101,8 @@ TEST_CASE("brick render: single pass and multipass waves give the same image") {
   CHECK(test::looks_non_blank(multi));
   CHECK(multi.pixels == single.pixels);
   CHECK(ms.samples == ss.samples);
-  CHECK(ss.dispatches == 1);
-  CHECK(ms.dispatches > 2);
+  CHECK(ss.dispatches == 2);  // the cells' classification, then one march
+  CHECK(ms.dispatches > 3);
 }
 
 TEST_CASE("brick render: paged through the pool equals the single-texture path within 1/255") {

@@ -123,7 +123,7 @@ TEST_CASE("empty-space cells: the separable min/max equals the direct 3D loop bi
 TEST_CASE("empty-space cells: ranges cover every voxel a sample within half a voxel of the cell filters") {
   // One R8 slot, chunk 16, apron 1: 18^3 texels, 2 cells of 8 voxels per axis.
   const uint32_t cs = 16, apron = 1, edge = cs + 2 * apron;
-  const BrickCells cells = brick_cells_for(cs);
+  const BrickCells cells = brick_cells_for(cs, 8);
   REQUIRE(cells.cells_per_axis == 2);
   REQUIRE(cells.cell_size == 8);
   std::vector<uint8_t> texels(size_t(edge) * edge * edge, 10);

@@ -1,8 +1,8 @@
-// The ray-casting core: slab test, classification (window, gamma, transfer
-// function, depth colour, gradient-magnitude opacity), and one compositing step
-// per optical model. Shared by raycast.comp and raycast.frag (whole volume in
-// one texture) and by brick-marching shaders: nothing here knows how the volume
-// is stored.
+// The ray-casting core: classification (window, gamma, transfer function,
+// depth colour, gradient-magnitude opacity), one compositing step per optical
+// model, and the finished pixel. brick_raycast.comp includes it and decides
+// where the samples are; nothing here knows how the volume is stored. The CPU
+// reference (engine/render/reference_renderer.cpp) repeats it in double.
 //
 // The including shader defines, before or after including this file:
 //   vec4 vxr_sample(vec3 p);              raw values of channels 0..3 at voxel-space
@@ -10,11 +10,11 @@
 //                                         in texel units (UNORM 0..1, or data units for float)
 //   vec4 vxr_transfer(int channel, float x);  transfer-function entry at x in 0..1:
 //                                         rgb the colour, a the opacity (extinction scale);
-//                                         vxr_transfer_table() below does it from a table texture
+//                                         vxr_transfer_index() below gives the two entries and weight
 //
 // Numerics (../shared/design/numerics.md): sample positions come from the step
 // index (never t += dt); opacity from accumulated optical depth, exp(-sum tau),
-// exact for any step; the slab test never makes NaN.
+// exact for any step.
 #ifndef VXR_RAYCAST_CORE_GLSL
 #define VXR_RAYCAST_CORE_GLSL
 
@@ -24,9 +24,9 @@ vec4 vxr_sample(vec3 p);
 vec4 vxr_transfer(int channel, float x);
 
 // Where depth-coded colour is measured: the position in the volume's voxel
-// space (the box [0, dims] of P). A dense includer samples in that space
-// already; a brick marcher samples in brick-local voxels and defines this to
-// map the ray parameter t (level-0 voxels along the unit ray) back.
+// space (the box [0, dims] of P). The brick marcher samples in brick-local
+// voxels and defines this to map the ray parameter t (level-0 voxels along
+// the unit ray) back.
 #ifndef VXR_DEPTH_POS
 #define VXR_DEPTH_POS(pos, t) (pos)
 #endif
@@ -46,30 +46,13 @@ layout(constant_id = 103) const bool VXR_SC_DEPTH_COLOR = false;  // depth.x != 
 layout(constant_id = 104) const bool VXR_SC_GAMMA = true;          // some window[c].z != 1
 layout(constant_id = 105) const bool VXR_SC_NAIVE_OPACITY = true;  // control2.z != 0
 
-// Table lookup with the interpolation done here (texelFetch + mix), so the CPU
-// reference can repeat it exactly: entry i sits at x = i / (VXR_TF_SIZE - 1).
-// Row `channel` of `tf` (VXR_TF_SIZE x VXR_MAX_CHANNELS, RGBA32F).
-vec4 vxr_transfer_table(sampler2D tf, int channel, float x) {
+// Table lookup with the interpolation done by the includer (two loads + mix),
+// so the CPU reference can repeat it exactly: entry i sits at x = i /
+// (VXR_TF_SIZE - 1); x mixes entries i and i + 1 with weight f on i + 1.
+void vxr_transfer_index(float x, out int i, out float f) {
   float u = clamp(x, 0.0, 1.0) * float(VXR_TF_SIZE - 1);
-  int i = min(int(u), VXR_TF_SIZE - 2);
-  float f = u - float(i);
-  return mix(texelFetch(tf, ivec2(i, channel), 0), texelFetch(tf, ivec2(i + 1, channel), 0), f);
-}
-
-// Ray o + t d against the box [bmin, bmax]. Zero direction components are
-// replaced by +-1e-30 first, so no 0 * inf = NaN can appear: axis-parallel
-// rays and origins on a face behave. The exit is widened by pbrt's gamma(3).
-bool vxr_hit_box(vec3 o, vec3 d, vec3 bmin, vec3 bmax, out float t0, out float t1) {
-  vec3 safe = mix(d, mix(vec3(1e-30), vec3(-1e-30), lessThan(d, vec3(0.0))), lessThan(abs(d), vec3(1e-30)));
-  vec3 inv = 1.0 / safe;
-  vec3 ta = (bmin - o) * inv;
-  vec3 tb = (bmax - o) * inv;
-  vec3 tmin = min(ta, tb);
-  vec3 tmax = max(ta, tb);
-  t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
-  t1 = min(min(tmax.x, tmax.y), tmax.z);
-  t1 *= 1.0 + 6.0 * 5.96e-8;
-  return t1 > t0;
+  i = min(int(u), VXR_TF_SIZE - 2);
+  f = u - float(i);
 }
 
 // 1 - exp(-tau), with the series for small tau so faint tissue survives float32.
@@ -243,23 +226,6 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
   }
 }
 
-// Marches the samples of a ray whose segments are [t_origin + i*step, +step),
-// clipped to [t_lo, t_hi]; sample i sits `jitter` (0..1) into its clipped
-// segment. A brick marcher calls this per brick with the ray's own t_origin,
-// so sample positions do not depend on brick boundaries.
-void vxr_march(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t_origin, float t_lo, float t_hi,
-               float jitter) {
-  float step = P.march.x;
-  uint i = uint(max(floor((t_lo - t_origin) / step), 0.0));
-  uint i_end = min(uint(max(ceil((t_hi - t_origin) / step), 0.0)), P.control.w);
-  for (; i < i_end && !r.done; ++i) {
-    float a = max(t_origin + float(i) * step, t_lo);
-    float b = min(t_origin + float(i + 1u) * step, t_hi);
-    if (b <= a) continue;
-    vxr_step(r, P, eye, dir, a + jitter * (b - a), b - a);
-  }
-}
-
 // The isosurface's colour at the crossing `pos` (ray parameter t): headlight
 // Lambert + specular on the central-difference normal. `dir`: the ray's unit
 // direction. A brick marcher calls it while the crossing's brick is bound.
@@ -318,28 +284,6 @@ float vxr_jitter(uvec2 pix) {
   h *= 0x846ca68bu;
   h ^= h >> 16;
   return float(h >> 8) * (1.0 / 16777216.0);
-}
-
-// The whole ray of pixel `pix` through the box [0, dims], ending at `t_limit`
-// (the depth image's distance, or +inf).
-vec4 vxr_cast(RaycastParams P, uvec2 pix, float depth_limit_view) {
-  // (2 pix + 1 - size) / size: the numerator is an exact integer, so the centre
-  // pixel of an odd-sized image gets ndc exactly 0 (an exactly axis-parallel
-  // ray where the camera is) even where the division is not correctly rounded.
-  vec2 size = vec2(P.control.yz);
-  vec2 ndc = (2.0 * vec2(pix) + 1.0 - size) / size;
-  vec3 raw_dir = P.forward.xyz + ndc.x * P.right.xyz - ndc.y * P.up.xyz;
-  vec3 dir = normalize(raw_dir);
-  vec3 eye = P.eye.xyz;
-  float t0, t1;
-  if (!vxr_hit_box(eye, dir, vec3(0.0), P.dims.xyz, t0, t1)) return vec4(0.0);
-  // A view depth z is at ray parameter z * |raw_dir| (raw_dir has unit view depth).
-  if (P.shading.y != 0.0) t1 = min(t1, depth_limit_view * length(raw_dir));
-  if (!(t1 > t0)) return vec4(0.0);
-  float jitter = P.march.w < 0.0 ? vxr_jitter(pix) : P.march.w;
-  VxrRay r = vxr_begin(P, dir);
-  vxr_march(r, P, eye, dir, t0, t0, t1, jitter);
-  return vxr_finish(r, P, eye, dir);
 }
 
 #endif

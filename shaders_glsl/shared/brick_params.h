@@ -21,6 +21,9 @@ using uvec4 = glm::uvec4;
 #define VXR_BRICK_QUANTIZE 64u    // final pixel rounded to 8 bits, v * 255 + 0.5 (UNORM targets: the one rounding rule)
 #define VXR_BRICK_FINAL_FLOAT 128u  // final pixel into the accumulation image (float), for a blit into the target
 #define VXR_BRICK_UNDERLAY 256u   // rays end at the underlay's depth (binding 9); its colour (binding 10) goes under the volume
+// No rays: workgroup (x, y) classifies 64 empty-space cells (y * 64 ..) of brick control.z + x for
+// this view's settings into binding 11, which the rays' cell test then reads (one load per cell).
+#define VXR_BRICK_CLASSIFY 512u
 
 // One brick to march, everything in its own local voxels (level-l voxels,
 // origin at the brick's interior corner): the CPU computes these in double,
@@ -36,8 +39,8 @@ struct BrickRecord {
 
 // Push constants: which bricks or work items a dispatch marches. Everything
 // else a ray needs (directions, image size, step, extinction, windows,
-// optical model) is the dense ray caster's RaycastParams (uniform buffer,
-// binding 7), filled by the same plan_raycast/pack_params.
+// optical model) is RaycastParams (shared/raycast_params.h, uniform buffer,
+// binding 7), filled by plan_raycast/pack_params.
 struct BrickCastParams {
   uvec4 control;   // xy: output pixel of the ray at (0, 0) (a rectangle of the target); z: first brick, w: brick count (single pass)
   uvec4 pass;      // x: work-item base with VXR_BRICK_WORK_ITEMS, y: empty-space cells per brick axis (0: off), z: flags

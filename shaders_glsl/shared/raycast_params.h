@@ -1,5 +1,5 @@
-// Uniform block of the ray caster (raycast.comp, raycast.frag, and any shader
-// that includes include/raycast_core.glsl), shared by GLSL and C++.
+// Uniform block of the ray caster (brick_raycast.comp, through
+// include/raycast_core.glsl), shared by GLSL and C++.
 // Only vec4/uvec4 members: std140 and C++ agree on their offsets without padding rules.
 #ifndef VXR_RAYCAST_PARAMS_H
 #define VXR_RAYCAST_PARAMS_H

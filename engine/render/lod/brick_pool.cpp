@@ -52,9 +52,9 @@ void convert_to_texels(DType dtype, const uint8_t* in, size_t n, uint8_t* out) {
   }
 }
 
-BrickCells brick_cells_for(uint32_t chunk_size) {
+BrickCells brick_cells_for(uint32_t chunk_size, uint32_t cell_voxels) {
   BrickCells c;
-  c.cells_per_axis = std::clamp((chunk_size + 7) / 8, 1u, 16u);
+  c.cells_per_axis = std::clamp((chunk_size + cell_voxels - 1) / cell_voxels, 1u, 16u);
   c.cell_size = (chunk_size + c.cells_per_axis - 1) / c.cells_per_axis;
   return c;
 }
@@ -272,6 +272,8 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   p->slot_.resize(p->capacity());
   for (uint32_t i = p->capacity(); i-- > 0;) p->free_.push_back(i);
   p->cells_ = brick_cells_for(source.chunk_size());
+  if (uint64_t(p->capacity()) * nch * p->cells_.count() * sizeof(glm::vec2) > kMaxCellRangeBytes)
+    p->cells_ = brick_cells_for(source.chunk_size(), 8);
   const uint64_t cell_bytes = uint64_t(p->capacity()) * nch * p->cells_.count() * sizeof(glm::vec2);
   VXR_ASSIGN_OR_RETURN(p->cell_ranges_, gpu::create_buffer(ctx, {cell_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                                  gpu::MemoryIntent::kUpload, "brick cell ranges"}));

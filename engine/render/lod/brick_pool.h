@@ -100,8 +100,13 @@ struct BrickCells {
   uint32_t cell_size = 8;  // voxels
   uint32_t count() const { return cells_per_axis * cells_per_axis * cells_per_axis; }
 };
-// About 8 voxels per cell, at most 16 cells per axis.
-BrickCells brick_cells_for(uint32_t chunk_size);
+// About `cell_voxels` voxels per cell, at most 16 cells per axis. The pool
+// uses 4 (measured with `vxr bench peer`: the MRI's rays skip 2.5x the
+// samples with 4-voxel cells, 1.7x with 8), or 8 where the cells of every
+// slot and channel would pass kMaxCellRangeBytes.
+BrickCells brick_cells_for(uint32_t chunk_size, uint32_t cell_voxels = 4);
+// The most the cell ranges of a pool may take (a storage buffer; lavapipe's range limit is 128 MiB).
+constexpr uint64_t kMaxCellRangeBytes = 64ull << 20;
 // The ranges of one channel of a slot (`texels`: edge^3 in `format`, edge =
 // chunk_size + 2 * apron) into out[count()] as (min, max), widened by a few
 // ulps so that a filtered value, however the device rounds its weights, lies

@@ -17,7 +17,7 @@ namespace {
 std::vector<VkDescriptorSetLayoutBinding> bindings() {
   return {
       {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VXR_MAX_CHANNELS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // one atlas per channel
-      {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
+      {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // transfer table
       {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
       {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
@@ -27,6 +27,7 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {8, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell ranges
       {9, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},   // underlay depth
       {10, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // underlay colour
+      {11, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell keys
   };
 }
 
@@ -80,6 +81,22 @@ void layout_barrier(VkCommandBuffer cmd, VkImage image, VkImageLayout from, VkIm
   VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
   dep.imageMemoryBarrierCount = 1;
   dep.pImageMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+void buffer_barrier(VkCommandBuffer cmd, VkBuffer buffer, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
+                    VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access) {
+  VkBufferMemoryBarrier2 b{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2};
+  b.srcStageMask = src_stage;
+  b.srcAccessMask = src_access;
+  b.dstStageMask = dst_stage;
+  b.dstAccessMask = dst_access;
+  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.buffer = buffer;
+  b.size = VK_WHOLE_SIZE;
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.bufferMemoryBarrierCount = 1;
+  dep.pBufferMemoryBarriers = &b;
   vkCmdPipelineBarrier2(cmd, &dep);
 }
 
@@ -166,6 +183,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   r->opt_ = options;
   if (source.apron() < 1) return invalid_argument("brick renderer: chunks need an apron of at least 1 voxel");
   VXR_ASSIGN_OR_RETURN(r->pool_, BrickPool::create(ctx, source, options.pool));
+  VXR_RETURN_IF_ERROR(r->ensure_cell_keys());
   r->value_scales_.assign(r->pool_->channels(), brick_value_scale(source.info().dtype));
   const auto b = bindings();
   r->pipes_ = options.pipelines ? options.pipelines : std::make_shared<BrickPipelines>();
@@ -178,12 +196,13 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
     r->view_sets_.push_back(set);
   }
   VXR_ASSIGN_OR_RETURN(r->linear_, gpu::create_linear_clamp_sampler(ctx));
-  VXR_ASSIGN_OR_RETURN(r->transfer_tex_,
-                       gpu::create_image(ctx, {VK_IMAGE_TYPE_2D, VK_FORMAT_R32G32B32A32_SFLOAT, {VXR_TF_SIZE, 2 * VXR_MAX_CHANNELS, 1},
-                                               VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                               "transfer function"}));
-  VXR_ASSIGN_OR_RETURN(r->tf_staging_, gpu::create_buffer(ctx, {uint64_t(VXR_TF_SIZE) * 2 * VXR_MAX_CHANNELS * sizeof(glm::vec4),
-                                                                VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+  // A storage buffer, not a texture: on lavapipe a texelFetch runs the
+  // sampler's code, a buffer load is a plain load (same floats, same image).
+  const uint64_t tf_bytes = uint64_t(VXR_TF_SIZE) * 2 * VXR_MAX_CHANNELS * sizeof(glm::vec4);
+  VXR_ASSIGN_OR_RETURN(r->transfer_buf_,
+                       gpu::create_buffer(ctx, {tf_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                                gpu::MemoryIntent::kDeviceLocal, "transfer function"}));
+  VXR_ASSIGN_OR_RETURN(r->tf_staging_, gpu::create_buffer(ctx, {tf_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                                                 gpu::MemoryIntent::kUpload, "transfer function staging"}));
   VXR_ASSIGN_OR_RETURN(r->table_, gpu::create_buffer(ctx, {uint64_t(options.max_bricks) * sizeof(shader::BrickRecord),
                                                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
@@ -224,9 +243,9 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
     if (set != r->mono_set_) r->bind_atlases(set, r->pool_atlases());
     // The monolithic texture has no cells (its record says so); the binding still needs a buffer.
     gpu::write_storage_buffer(ctx, set, 8, r->pool_->cell_ranges().buffer);
+    gpu::write_storage_buffer(ctx, set, 11, r->cell_keys_.buffer);
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
-    // The core reads the table with texelFetch: the sampler's filter is unused.
-    gpu::write_combined_image(ctx, set, 1, r->transfer_tex_.view, r->linear_);
+    gpu::write_storage_buffer(ctx, set, 1, r->transfer_buf_.buffer);
   }
   gpu::write_storage_buffer(ctx, r->mono_set_, 4, r->table_.buffer);
   gpu::write_storage_buffer(ctx, r->mono_set_, 6, r->items_.buffer);
@@ -234,6 +253,15 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_RETURN_IF_ERROR(r->ensure_target(1, 1));  // the storage binding needs an image even when views blit
   VXR_RETURN_IF_ERROR(r->pin_resident(0));
   return r;
+}
+
+Status BrickRenderer::ensure_cell_keys() {
+  const uint64_t bytes = uint64_t(pool_->capacity()) * pool_->channels() * pool_->cells().count() * sizeof(float);
+  if (cell_keys_.buffer && cell_keys_.size == bytes) return Status::ok();
+  // Written by each view's classify pass before its rays read it; never read elsewhere.
+  VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                             gpu::MemoryIntent::kDeviceLocal, "brick cell keys"}));
+  return Status::ok();
 }
 
 Status BrickRenderer::pin_resident(uint32_t timepoint) {
@@ -307,15 +335,13 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
       counts[size_t(c) * VXR_TF_SIZE + i] = glm::vec4(n, 0.0f, 0.0f, 0.0f);
     }
   }
-  gpu::transition_image(cmd, transfer_tex_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                        VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
-  VkBufferImageCopy region{};
-  region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-  region.imageExtent = transfer_tex_.extent;
-  vkCmdCopyBufferToImage(cmd, tf_staging_.buffer, transfer_tex_.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
-  gpu::transition_image(cmd, transfer_tex_, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
-                        VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                        VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  // The previous frame's rays may still read the table; this frame's read it after the copy.
+  buffer_barrier(cmd, transfer_buf_.buffer, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT,
+                 VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  const VkBufferCopy region{0, 0, tf_staging_.size};
+  vkCmdCopyBuffer(cmd, tf_staging_.buffer, transfer_buf_.buffer, 1, &region);
+  buffer_barrier(cmd, transfer_buf_.buffer, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   tf_uploaded_ = table.rgba;
   tf_recorded_ = true;
   return Status::ok();
@@ -397,8 +423,11 @@ Status BrickRenderer::rebuild_pool(uint32_t apron) {
   VXR_ASSIGN_OR_RETURN(pool_, BrickPool::create(ctx_, src_, po));
   opt_.pool = po;
   for (VkDescriptorSet set : view_sets_) bind_atlases(set, pool_atlases());
+  VXR_RETURN_IF_ERROR(ensure_cell_keys());
   for (VkDescriptorSet set : view_sets_) gpu::write_storage_buffer(ctx_, set, 8, pool_->cell_ranges().buffer);
   gpu::write_storage_buffer(ctx_, mono_set_, 8, pool_->cell_ranges().buffer);
+  for (VkDescriptorSet set : view_sets_) gpu::write_storage_buffer(ctx_, set, 11, cell_keys_.buffer);
+  gpu::write_storage_buffer(ctx_, mono_set_, 11, cell_keys_.buffer);
   // Requested bricks are keyed the same; the new pool has none of them yet.
   return pin_resident(pinned_timepoint_);
 }
@@ -467,13 +496,13 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   shader::BrickCastParams p{};
   // Empty-space cells: for the models whose empty samples change nothing
   // (average counts every length, iso refines against the previous sample).
-  // MIP / MinIP test a cell against the ray's running value, so rays of a
-  // group diverge: measured with `vxr bench peer` (MRI, lavapipe) the test
-  // costs more than it saves at ~4 samples per cell (0.8x at step 2) and pays
-  // from ~8 (1.3x at step 1, 2x at 0.25).
+  // MIP / MinIP test a cell against the ray's running value, so each cell
+  // costs a walk: measured with `vxr bench peer` (MRI, lavapipe, 4-voxel
+  // cells, one load per test) the cells pay from ~2 samples per cell (step 2:
+  // 186 ms vs 216 without; step 1: 245 vs 325).
   const bool reduce = model == VXR_MODEL_MIP || model == VXR_MODEL_MINIP;
   const bool cells = skip_cells && (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION ||
-                                    (reduce && pool_->cells().cell_size >= 8.0 * s.step_voxels));
+                                    (reduce && pool_->cells().cell_size >= 2.0 * s.step_voxels));
   const uint32_t cells_per_axis = cells ? pool_->cells().cells_per_axis : 0u;
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(pool_->cells().cell_size));
@@ -493,6 +522,15 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->pipeline);
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set, 0, nullptr);
+  if (cells_per_axis > 0 && bricks > 0) {
+    // The cells of the view's bricks classified once, so a ray's cell test is a load and a compare.
+    p.control = glm::uvec4(0, 0, 0, bricks);
+    p.pass = glm::uvec4(0, cells_per_axis, VXR_BRICK_CLASSIFY, 0);
+    vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+    vkCmdDispatch(cmd, bricks, (pool_->cells().count() + 63) / 64, 1);
+    ++dispatches;
+    compute_barrier(cmd);
+  }
   auto dispatch = [&](uint32_t first, uint32_t count, uint32_t flags) {
     p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), first, count);
     p.pass = glm::uvec4(0, cells_per_axis, flags, 0);

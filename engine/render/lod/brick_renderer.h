@@ -24,7 +24,7 @@
 //
 // Empty space is skipped twice, with identical images: the traversal drops
 // bricks whose min/max maps to zero opacity (brick_may_contribute), and rays
-// jump the empty cells (~8^3 voxels, BrickCells) inside the bricks they march,
+// jump the empty cells (~4^3 voxels, BrickCells) inside the bricks they march,
 // on the same sample grid. LodSettings::skip_empty turns both off,
 // BrickFrameSettings::skip_cells the cells only (`vxr bench peer` measures).
 // Early ray termination: emission-absorption rays stop at transmittance
@@ -191,6 +191,8 @@ class BrickRenderer final : public VolumeRenderer {
   Status ensure_accum(uint32_t width, uint32_t height);
   // Records the transfer table's upload when it changed (once per frame at most).
   Status record_transfer(VkCommandBuffer cmd, const TransferTable& table);
+  // The cell-key buffer (brick_raycast.comp binding 11) sized for the pool.
+  Status ensure_cell_keys();
   // Rebuilds the pool with `apron` (waits for the device; rebinds every set).
   Status rebuild_pool(uint32_t apron);
   // The frame's timepoint: its top level pinned (begin_frame, before any copy is recorded).
@@ -230,16 +232,15 @@ class BrickRenderer final : public VolumeRenderer {
   std::unique_ptr<BrickPool> pool_;
   std::shared_ptr<BrickPipelines> pipes_;
   const gpu::ComputePipeline* pipeline_ = nullptr;  // emission-absorption, one channel; its set layout is the sets'
-
   gpu::Handle<VkDescriptorPool> desc_pool_;
   VkDescriptorSet mono_set_ = VK_NULL_HANDLE;
   std::vector<VkDescriptorSet> view_sets_;  // one per view of a frame
   gpu::Handle<VkSampler> linear_;
-  gpu::Image transfer_tex_, target_, float_target_, accum_;
+  gpu::Image target_, float_target_, accum_;
   gpu::Image no_under_depth_, no_under_color_;  // 1x1, bound where a view has no underlay
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
-  gpu::Buffer table_, counters_, items_, params_, tf_staging_;
+  gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_;
   gpu::Handle<VkQueryPool> timestamps_;  // render(): two per frame; null without timestamps
   VkDeviceSize params_stride_ = 0;
   // This frame: views recorded, and the table / work-list entries they took.
