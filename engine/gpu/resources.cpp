@@ -213,6 +213,22 @@ std::atomic<uint64_t> g_readbacks{0};
 
 uint64_t readback_count() { return g_readbacks.load(); }
 
+void buffer_barrier(VkCommandBuffer cmd, VkBuffer buffer, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
+                    VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access) {
+  VkBufferMemoryBarrier2 b{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2};
+  b.srcStageMask = src_stage;
+  b.srcAccessMask = src_access;
+  b.dstStageMask = dst_stage;
+  b.dstAccessMask = dst_access;
+  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.buffer = buffer;
+  b.size = VK_WHOLE_SIZE;
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.bufferMemoryBarrierCount = 1;
+  dep.pBufferMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
+
 Status readback_image(Context& ctx, Image& image, void* out, size_t bytes, VkImageLayout final_layout) {
   VXR_TRACE_SCOPE("gpu.readback_image");
   ++g_readbacks;
@@ -233,18 +249,8 @@ Status readback_image(Context& ctx, Image& image, void* out, size_t bytes, VkIma
     vkCmdCopyImageToBuffer(cmd, image.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging.buffer, 1, &region);
     transition_image(cmd, image, final_layout, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
                      VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-    VkBufferMemoryBarrier2 hb{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2};
-    hb.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
-    hb.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-    hb.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-    hb.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-    hb.srcQueueFamilyIndex = hb.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    hb.buffer = staging.buffer;
-    hb.size = VK_WHOLE_SIZE;
-    VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-    dep.bufferMemoryBarrierCount = 1;
-    dep.pBufferMemoryBarriers = &hb;
-    vkCmdPipelineBarrier2(cmd, &dep);
+    buffer_barrier(cmd, staging.buffer, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
   }));
   std::memcpy(out, staging.mapped, bytes);
   return Status::ok();

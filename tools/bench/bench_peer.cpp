@@ -21,6 +21,7 @@
 
 #include "assets/assets.h"
 #include "bench.h"
+#include "bench/brick_timing.h"
 #include "core/progress.h"
 #include "render/lod/brick_renderer.h"
 #include "render/reference_renderer.h"
@@ -51,47 +52,10 @@ struct Scene {
   RenderSettings settings;
 };
 
-struct Timed {
-  double wall_ms = 0.0, gpu_ms = 0.0;
-  BrickFrameStats stats;
-  ImageRgba8 image;
-};
-
-// Converges (every brick resident), then the median of `repeats` frames.
-Result<Timed> measure(BrickRenderer& r, const Camera& cam, const RenderSettings& s, const BrickFrameSettings& f,
-                      uint32_t size, int repeats) {
-  Timed t;
-  for (int i = 0;; ++i) {
-    VXR_ASSIGN_OR_RETURN(t.image, r.render(cam, s, f, size, size, &t.stats));
-    if (t.stats.lod.missing == 0) break;
-    if (i > 200) return internal_error("bench peer: the view did not converge in 200 frames");
-  }
-  std::vector<double> gpu;
-  Status err;
-  t.wall_ms = median_ms(
-      repeats,
-      [&] {
-        auto img = r.render(cam, s, f, size, size, &t.stats);
-        if (!img) return img.status();
-        t.image = std::move(*img);
-        gpu.push_back(t.stats.gpu_ms);
-        return Status::ok();
-      },
-      &err);
-  if (!err.is_ok()) return err;
-  t.gpu_ms = median(gpu);
-  return t;
-}
-
-// The VTK-style transfer function: a linear opacity ramp over the window, grey.
+// The VTK-style transfer function with opacity per `unit_distance` world units.
 RenderSettings ramp(OpticalModel model, double lo, double hi, double unit_distance) {
-  RenderSettings s;
+  RenderSettings s = vtk_ramp(model, lo, hi);
   s.opacity_unit_distance = unit_distance;
-  s.model = model;
-  s.channels[0].window_lo = lo;
-  s.channels[0].window_hi = hi;
-  s.channels[0].colormap = "gray";
-  s.channels[0].opacity_points = {{0.0, 0.0}, {1.0, 1.0}};
   return s;
 }
 
@@ -151,10 +115,10 @@ int run(const Options& o) {
       on.lod.force_level = 0;
       BrickFrameSettings off = on;
       off.lod.skip_empty = false;
-      auto a = measure(**r, cam, s, on, o.size, o.common.repeats);
+      auto a = time_converged(**r, cam, s, on, o.size, o.common.repeats);
       if (!a) return fail(a.status());
       progress.advance(1);
-      auto b = measure(**r, cam, s, off, o.size, o.common.repeats);
+      auto b = time_converged(**r, cam, s, off, o.size, o.common.repeats);
       if (!b) return fail(b.status());
       progress.advance(1);
       const bool identical = a->image.pixels == b->image.pixels;

@@ -12,6 +12,7 @@
 #include "render/camera.h"
 #include "render/lod/brick_renderer.h"
 #include "render/volume_session.h"
+#include "bench/brick_timing.h"
 #include "roofline.h"
 #include "volume/dense_chunk_source.h"
 #include "volume/procedural_source.h"
@@ -27,15 +28,10 @@ struct Scene {
   RenderSettings settings;
 };
 
-// A VTK-style linear opacity ramp over [lo, hi], grey (as `vxr bench peer`).
+// `vxr bench peer`'s transfer function at `step`.
 RenderSettings ramp(OpticalModel model, double lo, double hi, double step) {
-  RenderSettings s;
-  s.model = model;
+  RenderSettings s = vtk_ramp(model, lo, hi);
   s.step_voxels = step;
-  s.channels[0].window_lo = lo;
-  s.channels[0].window_hi = hi;
-  s.channels[0].colormap = "gray";
-  s.channels[0].opacity_points = {{0.0, 0.0}, {1.0, 1.0}};
   return s;
 }
 
@@ -70,38 +66,17 @@ Result<std::vector<Scene>> scenes() {
   return out;
 }
 
-struct Measured {
-  double gpu_ms = 0.0, wall_ms = 0.0;
-  uint64_t samples = 0;
-};
-
 // Converges (every brick resident), then the median GPU time of `repeats` frames.
-Result<Measured> measure(gpu::Context& ctx, const Scene& sc, int repeats) {
+Result<TimedFrames> measure(gpu::Context& ctx, const Scene& sc, int repeats) {
   BrickRendererOptions ro;
   ro.preload_if_fits = true;
   VXR_ASSIGN_OR_RETURN(auto r, BrickRenderer::create(ctx, *sc.source, ro));
   const Camera cam = orbit_camera(r->placement(), 30.0, 25.0, 1.25);
   BrickFrameSettings f;
   f.lod.force_level = 0;
-  BrickFrameStats st;
-  for (int i = 0;; ++i) {
-    VXR_RETURN_IF_ERROR(r->render(cam, sc.settings, f, kSize, kSize, &st).status());
-    if (st.lod.missing == 0) break;
-    if (i > 200) return internal_error("bench roofline: the view did not converge in 200 frames");
-  }
-  if (st.gpu_ms <= 0.0) return unsupported("bench roofline: the device has no timestamps");
-  Measured m;
-  std::vector<double> gpu;
-  Status err;
-  m.wall_ms = median_ms(repeats, [&] {
-    VXR_RETURN_IF_ERROR(r->render(cam, sc.settings, f, kSize, kSize, &st).status());
-    gpu.push_back(st.gpu_ms);
-    m.samples = st.samples;
-    return Status::ok();
-  }, &err);
-  if (!err.is_ok()) return err;
-  m.gpu_ms = median(gpu);
-  return m;
+  VXR_ASSIGN_OR_RETURN(TimedFrames t, time_converged(*r, cam, sc.settings, f, kSize, repeats));
+  if (t.gpu_ms <= 0.0) return unsupported("bench roofline: the device has no timestamps");
+  return t;
 }
 
 }  // namespace
@@ -127,17 +102,17 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
       for (const Scene& sc : *made) {
         auto m = measure(ctx, sc, opt->repeats);
         if (!m) return cli::fail(m.status());
-        const double rate = m->samples / (m->gpu_ms * 1e-3);
+        const double rate = m->stats.samples / (m->gpu_ms * 1e-3);
         const double ratio = rate / roof->trilinear_samples_per_s;
         rows.push_back({{"scene", sc.name},
                         {"step_voxels", sc.settings.step_voxels},
                         {"gpu_ms", m->gpu_ms},
                         {"wall_ms", m->wall_ms},
-                        {"samples", m->samples},
+                        {"samples", m->stats.samples},
                         {"samples_per_s", rate},
                         {"roofline_ratio", ratio}});
         std::fprintf(stderr, "roofline: %-18s %8.2f gpu ms %8.2f wall ms %6.1f M samples %6.0f M/s  %.2f of ceiling\n",
-                     sc.name.c_str(), m->gpu_ms, m->wall_ms, m->samples / 1e6, rate / 1e6, ratio);
+                     sc.name.c_str(), m->gpu_ms, m->wall_ms, m->stats.samples / 1e6, rate / 1e6, ratio);
       }
       nlohmann::json doc = {
           {"ceilings",
