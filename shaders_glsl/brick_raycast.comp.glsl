@@ -50,6 +50,11 @@ layout(binding = 10, rgba8) uniform readonly image2D under_color;
 // Per atlas slot and channel (cell_range's layout), each cell classified for
 // this view's settings by a VXR_BRICK_CLASSIFY pass: see cell_key.
 layout(std430, binding = 11) buffer CellKeys { float cell_keys[]; };
+// Rows 0..3 of binding 1 again (the colour and opacity entries): a uniform
+// buffer, which lavapipe (Mesa 22) reads at per-ray offsets with straight-line
+// loads, where a storage buffer load loops over the rays with a branch each
+// (same floats).
+layout(std140, binding = 12) uniform TransferRows { vec4 transfer_rows[VXR_MAX_CHANNELS * VXR_TF_SIZE]; };
 
 layout(push_constant) uniform Push { BrickCastParams p; };
 
@@ -81,7 +86,7 @@ vec4 vxr_transfer(int channel, float x) {
   float f;
   vxr_transfer_index(x, i, f);
   const int row = channel * VXR_TF_SIZE + i;
-  return mix(transfer_table[row], transfer_table[row + 1], f);
+  return mix(transfer_rows[row], transfer_rows[row + 1], f);
 }
 
 // A ray's state between passes in one RGBA32F texel. The CPU sends only
