@@ -277,3 +277,34 @@ TEST_CASE("empty-space cells: images with skipping on and off are bit-identical 
     }
   }
 }
+
+TEST_CASE("empty-space cells: the CPU cell test keeps every cell that can reach an opaque table entry") {
+  // A ramp from the window's low end (VTK's usual opacity), u8 texels: a cell
+  // below the window reaches entry 0 only (transparent); one whose top
+  // reaches into the window is kept. A transparent band inside the window
+  // drops cells within it, but not one reaching one entry past its edge.
+  RenderSettings s;
+  s.channels[0].window_lo = 75;
+  s.channels[0].window_hi = 200;
+  s.channels[0].opacity_points = {{0.0, 0.0}, {1.0, 1.0}};
+  const std::vector<double> u8{255.0};
+  const CellOpacity ramp(s, build_transfer_table(s), u8);
+  auto texel = [](double v) { return float(v / 255.0); };
+  CHECK_FALSE(ramp.may_contribute(0, {texel(0), texel(74)}));
+  CHECK(ramp.may_contribute(0, {texel(0), texel(76)}));
+  CHECK(ramp.may_contribute(0, {texel(180), texel(255)}));
+
+  s.channels[0].window_lo = 0;
+  s.channels[0].window_hi = 255;
+  s.channels[0].opacity_points = {{0.0, 1.0}, {0.4, 1.0}, {0.4001, 0.0}, {0.6, 0.0}, {0.6001, 1.0}, {1.0, 1.0}};
+  const CellOpacity band(s, build_transfer_table(s), u8);
+  CHECK_FALSE(band.may_contribute(0, {texel(110), texel(145)}));
+  CHECK(band.may_contribute(0, {texel(110), texel(160)}));  // reaches past the band's top
+  CHECK(band.may_contribute(0, {texel(101), texel(145)}));  // and past its bottom
+  CHECK(band.hash() != ramp.hash());
+  CHECK(band.hash() == CellOpacity(s, build_transfer_table(s), u8).hash());
+
+  s.channels[0].enabled = false;
+  const CellOpacity off(s, build_transfer_table(s), u8);
+  CHECK_FALSE(off.may_contribute(0, {texel(0), texel(255)}));
+}

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 
 #include "core/trace.h"
 #include "render/raycast_setup.h"
@@ -148,6 +149,51 @@ bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, s
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, double lo, double hi) {
   const ChunkStats r{lo, hi};
   return brick_may_contribute(s, table, std::span(&r, 1));
+}
+
+CellOpacity::CellOpacity(const RenderSettings& s, const TransferTable& table, const std::vector<double>& value_scales) {
+  uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a over what the test reads
+  auto mix = [&h](const void* p, size_t n) {
+    for (size_t i = 0; i < n; ++i) h = (h ^ static_cast<const uint8_t*>(p)[i]) * 0x100000001b3ull;
+  };
+  for (size_t c = 0; c < value_scales.size(); ++c) {
+    Channel ch;
+    if (c < s.channels.size()) {
+      const ChannelSettings& cs = s.channels[c];
+      ch.enabled = cs.enabled;
+      ch.lo = cs.window_lo, ch.hi = cs.window_hi, ch.gamma = cs.gamma;
+    }
+    ch.scale = value_scales[c];
+    ch.opaque_upto.resize(VXR_TF_SIZE);
+    uint16_t n = 0;
+    for (int i = 0; i < VXR_TF_SIZE; ++i) ch.opaque_upto[i] = n += table.at(int(c), i).a != 0.0 ? 1 : 0;
+    mix(&ch.enabled, sizeof(ch.enabled));
+    for (double v : {ch.lo, ch.hi, ch.gamma, ch.scale}) mix(&v, sizeof(v));
+    mix(ch.opaque_upto.data(), ch.opaque_upto.size() * sizeof(uint16_t));
+    channels_.push_back(std::move(ch));
+  }
+  hash_ = h ? h : 1;
+}
+
+bool CellOpacity::may_contribute(uint32_t channel, glm::vec2 texel_range) const {
+  const Channel& ch = channels_[channel];
+  if (!ch.enabled) return false;
+  // The lookup at u = x * 255 mixes entries floor(u) and floor(u) + 1 (the
+  // latter with weight 0 at an integer u). The shader's float u lies within
+  // far less than kSlack of this one; a value clear of the window (by more
+  // than float error) is clamped to 0 or 1 exactly there too and reaches one entry.
+  const int n = VXR_TF_SIZE - 1;
+  constexpr double kClear = 1e-6, kSlack = 1e-3;
+  auto entry = [&ch, n](double texel, bool upper) {
+    double x = (texel * ch.scale - ch.lo) / (ch.hi - ch.lo);
+    if (x <= -kClear) return 0;
+    if (x >= 1.0 + kClear) return n;
+    x = std::clamp(x, 0.0, 1.0);
+    const double u = (ch.gamma == 1.0 ? x : std::pow(x, ch.gamma)) * n;
+    return std::clamp(int(upper ? std::ceil(u + kSlack) : std::floor(u - kSlack)), 0, n);
+  };
+  const int i0 = entry(texel_range.x, false), i1 = entry(texel_range.y, true);
+  return ch.opaque_upto[i1] - (i0 > 0 ? ch.opaque_upto[i0 - 1] : 0) > 0;
 }
 
 bool brick_state_fits_texel(const RenderSettings& s, uint32_t channels) {
@@ -411,6 +457,7 @@ Status BrickRenderer::rebuild_pool(uint32_t apron) {
   if (VkResult vr = vkDeviceWaitIdle(ctx_.device()); vr != VK_SUCCESS)
     return internal_error("brick renderer: vkDeviceWaitIdle failed (" + std::to_string(int(vr)) + ")");
   pool_.reset();
+  occupied_.clear();
   VXR_ASSIGN_OR_RETURN(pool_, BrickPool::create(ctx_, src_, po));
   opt_.pool = po;
   for (VkDescriptorSet set : view_sets_) bind_atlases(set, pool_atlases());
@@ -434,22 +481,57 @@ Status BrickRenderer::ensure_timepoint(uint32_t timepoint) {
   return Status::ok();
 }
 
+BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells) {
+  const BrickBox box = chunk_box(src_, key);
+  const auto& ds_u = src_.levels()[key.level].downsample;
+  const glm::dvec3 ds(ds_u[0], ds_u[1], ds_u[2]);
+  BrickBox m{glm::dvec3(0.0), (box.hi - box.lo) / ds};
+  if (clip.roi.enabled) {
+    m.lo = glm::max(m.lo, (clip.roi.lo - box.lo) / ds);
+    m.hi = glm::min(m.hi, (clip.roi.hi - box.lo) / ds);
+  }
+  if (!cells) return m;
+  // Samples outside the kept cells lie in cells whose ranges cover every
+  // voxel they filter: zero opacity, nothing to add (a sample within rounding
+  // of the box's face is within half a voxel of such a cell too).
+  const uint32_t slot = pool_->slot_of(key);
+  if (occupied_.size() != pool_->capacity()) occupied_.assign(pool_->capacity(), {});
+  OccupiedCells& oc = occupied_[slot];
+  if (oc.settings != cells->hash() || !(oc.key == key)) {
+    const uint32_t n = pool_->cells().cells_per_axis, count = pool_->cells().count();
+    const auto* ranges = static_cast<const glm::vec2*>(pool_->cell_ranges().mapped);
+    glm::uvec3 lo(n), hi(0);
+    for (uint32_t z = 0; z < n; ++z)
+      for (uint32_t y = 0; y < n; ++y)
+        for (uint32_t x = 0; x < n; ++x) {
+          const uint32_t cell = (z * n + y) * n + x;
+          for (uint32_t c = 0; c < cells->channels(); ++c)
+            if (cells->may_contribute(c, ranges[(size_t(slot) * cells->channels() + c) * count + cell])) {
+              lo = glm::min(lo, glm::uvec3(x, y, z));
+              hi = glm::max(hi, glm::uvec3(x, y, z) + 1u);
+              break;
+            }
+        }
+    oc = {key, cells->hash(), lo, hi};
+  }
+  const double s = pool_->cells().cell_size;
+  m.lo = glm::max(m.lo, glm::dvec3(oc.lo) * s);
+  m.hi = glm::min(m.hi, glm::dvec3(oc.hi) * s);
+  return m;
+}
+
 void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
-                                const LodSettings& clip) const {
+                                const LodSettings& clip, const BrickBox& local) const {
   // Everything in double, then local (small) numbers to float.
   const BrickBox box = chunk_box(src_, key);
   const auto& ds_u = src_.levels()[key.level].downsample;
   const glm::dvec3 ds(ds_u[0], ds_u[1], ds_u[2]);
-  glm::dvec3 lo(0.0), hi = (box.hi - box.lo) / ds;
-  if (clip.roi.enabled) {
-    lo = glm::max(lo, (clip.roi.lo - box.lo) / ds);
-    hi = glm::min(hi, (clip.roi.hi - box.lo) / ds);
-  }
   shader::BrickRecord r{};
   r.eye = v4((view.eye - box.lo) / ds);
   r.scale = v4(1.0 / ds);
-  r.box_lo = v4(lo);
-  r.box_hi = v4(hi);
+  // An empty box as lo = hi: every ray misses it.
+  r.box_lo = v4(local.lo);
+  r.box_hi = v4(glm::max(local.lo, local.hi));
   r.atlas = glm::vec4(atlas_origin, float(pool_->slot_of(key)));  // w: the slot, for its cell ranges
   if (clip.cut.enabled) {
     // dot(n, lo0 + ds * p) + d  ->  dot(n * ds, p) + dot(n, lo0) + d, normalised.
@@ -581,6 +663,8 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
 }
 
 namespace {
+bool is_empty(const BrickBox& b) { return !(b.lo.x < b.hi.x && b.lo.y < b.hi.y && b.lo.z < b.hi.z); }
+
 // Screen rectangle (pixels) a box covers; the whole image when it reaches behind the eye.
 glm::uvec4 screen_rect(const BrickBox& b, const LodView& v) {
   const glm::dmat3 basis(v.forward, v.right, v.up);
@@ -610,7 +694,7 @@ glm::uvec4 warp_rect(const glm::uvec4& r, const WarpAxis& ax, const WarpAxis& ay
 }
 }  // namespace
 
-Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<ChunkKey>& draw, const LodView& view,
+Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<BrickBox>& boxes, const LodView& view,
                                                            const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used) {
   // Each brick becomes one work item per 8x8 tile holding a pixel whose ray
   // hits it. A brick goes into the wave after the last wave that wrote any of
@@ -644,10 +728,11 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
   std::vector<Item> items;
   uint32_t waves = 0;
   std::vector<uint32_t> hit_pixels;
-  for (uint32_t b = 0; b < draw.size(); ++b) {
-    const glm::uvec4 r = warp_rect(screen_rect(chunk_box(src_, draw[b]), view), ax, ay);
+  for (uint32_t b = 0; b < boxes.size(); ++b) {
+    if (is_empty(boxes[b])) continue;
+    const glm::uvec4 r = warp_rect(screen_rect(boxes[b], view), ax, ay);
     if (r.z == 0 || r.w == 0) continue;
-    BrickBox box = chunk_box(src_, draw[b]);
+    BrickBox box = boxes[b];
     const glm::dvec3 grow = 1e-3 * (box.hi - box.lo);
     box.lo -= grow;
     box.hi += grow;
@@ -692,13 +777,14 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Chu
   return out;
 }
 
-Status BrickRenderer::build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, const WarpAxis& ax,
+Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const LodView& view, const WarpAxis& ax,
                                        const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used) {
   const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
   std::vector<std::vector<uint32_t>> lists(size_t(tw) * th);
   size_t total = lists.size();
-  for (uint32_t b = 0; b < draw.size(); ++b) {
-    const glm::uvec4 r = warp_rect(screen_rect(chunk_box(src_, draw[b]), view), ax, ay);
+  for (uint32_t b = 0; b < boxes.size(); ++b) {
+    if (is_empty(boxes[b])) continue;
+    const glm::uvec4 r = warp_rect(screen_rect(boxes[b], view), ax, ay);
     if (r.z == 0 || r.w == 0) continue;
     for (uint32_t y = r.y / 8; y <= (r.y + r.w - 1) / 8; ++y)
       for (uint32_t x = r.x / 8; x <= (r.x + r.z - 1) / 8; ++x) lists[size_t(y) * tw + x].push_back(b);
@@ -816,10 +902,23 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
                         "table has room for " + std::to_string((table_.size - std::min(table_.size, table_base)) /
                                                                sizeof(shader::BrickRecord)) +
                         " (of " + std::to_string(opt_.max_bricks) + "); raise the LOD bias or max_bricks");
+  // Where skipping jumps empty cells, rays of E-A and emission march only the
+  // box of a brick's kept cells, and the work lists cover only its screen
+  // rectangle: the same samples, without walking the empty margin.
+  const bool skip_cells = frame.lod.skip_empty && frame.skip_cells;
+  const bool zero_alpha_skips = s.model == OpticalModel::kEmissionAbsorption || s.model == OpticalModel::kEmission;
+  std::optional<CellOpacity> cell_opacity;
+  if (skip_cells && zero_alpha_skips) cell_opacity.emplace(s, tf, value_scales_);
+  std::vector<BrickBox> march_world(lod.draw.size());
   for (size_t i = 0; i < lod.draw.size(); ++i) {
-    const glm::uvec3 o = pool_->touch(lod.draw[i]);
-    fill_record(static_cast<uint8_t*>(table_.mapped) + table_base + i * sizeof(shader::BrickRecord), lod.draw[i],
-                glm::vec3(o), view, frame.lod);
+    const ChunkKey& key = lod.draw[i];
+    const glm::uvec3 o = pool_->touch(key);
+    const BrickBox local = march_box(key, frame.lod, cell_opacity ? &*cell_opacity : nullptr);
+    fill_record(static_cast<uint8_t*>(table_.mapped) + table_base + i * sizeof(shader::BrickRecord), key,
+                glm::vec3(o), view, frame.lod, local);
+    const auto& ds_u = src_.levels()[key.level].downsample;
+    const glm::dvec3 ds(ds_u[0], ds_u[1], ds_u[2]), origin = chunk_box(src_, key).lo;
+    march_world[i] = {origin + local.lo * ds, origin + local.hi * ds};
   }
   BrickPassMode mode = frame.mode != BrickPassMode::kAuto ? frame.mode
                        : ctx_.info().is_cpu()             ? BrickPassMode::kMultipass
@@ -832,9 +931,9 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   size_t items_n = 0;
   std::vector<glm::uvec2> waves;
   if (mode == BrickPassMode::kMultipass) {
-    VXR_ASSIGN_OR_RETURN(waves, build_waves(lod.draw, view, ax, ay, items_dst, items_capacity, &items_n));
+    VXR_ASSIGN_OR_RETURN(waves, build_waves(march_world, view, ax, ay, items_dst, items_capacity, &items_n));
   } else if (mode == BrickPassMode::kTiled) {
-    VXR_RETURN_IF_ERROR(build_tile_lists(lod.draw, view, ax, ay, items_dst, items_capacity, &items_n));
+    VXR_RETURN_IF_ERROR(build_tile_lists(march_world, view, ax, ay, items_dst, items_capacity, &items_n));
   }
   const VkDeviceSize items_bytes = std::max<size_t>(items_n, 1) * sizeof(glm::uvec4);
   if (items_base + items_bytes > items_.size) return out_of_range("render: the frame's work list is full");

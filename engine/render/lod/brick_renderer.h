@@ -122,6 +122,32 @@ bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, s
 // One channel: ranges = {[lo, hi]}.
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, double lo, double hi);
 
+// Whether an empty-space cell may change an emission or emission-absorption
+// ray (whose zero-opacity samples change nothing): the classify pass's test
+// on the CPU, in double and one table entry wider each side, so that a cell
+// it calls empty the shader's float test calls empty too. Marching only the
+// box of the cells it keeps (BrickRenderer::march_box) then gives the same
+// samples a ray that jumps the empty cells takes.
+class CellOpacity {
+ public:
+  // `value_scales`: per drawn channel, data units per texel unit.
+  CellOpacity(const RenderSettings& s, const TransferTable& table, const std::vector<double>& value_scales);
+  // `texel_range`: one channel's (min, max) of a cell, atlas texel units (BrickPool cell ranges).
+  bool may_contribute(uint32_t channel, glm::vec2 texel_range) const;
+  uint32_t channels() const { return static_cast<uint32_t>(channels_.size()); }
+  // Equal for settings that classify every cell alike (what a cached box is keyed by); never 0.
+  uint64_t hash() const { return hash_; }
+
+ private:
+  struct Channel {
+    bool enabled = false;
+    double lo = 0, hi = 1, gamma = 1, scale = 1;
+    std::vector<uint16_t> opaque_upto;  // entries 0..i with non-zero opacity
+  };
+  std::vector<Channel> channels_;
+  uint64_t hash_ = 0;
+};
+
 // Whether a ray's state fits the one RGBA32F texel the multipass waves carry
 // between dispatches (brick_raycast.comp pack_ray): ea with one channel or
 // composite, emission, mip/minip with one channel, average with up to 3, iso.
@@ -206,9 +232,15 @@ class BrickRenderer final : public VolumeRenderer {
   // The variant for these specialisation constants, built on first use.
   Result<const gpu::ComputePipeline*> variant(uint32_t model, uint32_t channels, bool gradient, bool depth, bool gamma,
                                               bool naive);
-  // Fills the brick record for `key` (`atlas_origin`: interior origin in texels).
+  // The part of brick `key` its rays march, in its local voxels: the brick
+  // clipped to the ROI and, with `cells` (E-A and emission, cell skipping
+  // on), to the box of its cells that `cells` says may change a ray. Empty
+  // (lo >= hi on an axis) when no cell may.
+  BrickBox march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells);
+  // Fills the brick record for `key` (`atlas_origin`: interior origin in
+  // texels; `box`: march_box, local voxels).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
-                   const LodSettings& clip) const;
+                   const LodSettings& clip, const BrickBox& box) const;
   // Records one view's dispatches with `set` and writes the result into `target`.
   // `skip_cells`: rays jump the empty cells of each brick (BrickCells).
   // `model`: the packed parameters' VXR_MODEL_* (control.x).
@@ -219,10 +251,11 @@ class BrickRenderer final : public VolumeRenderer {
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
   // `dst` (capacity entries); returns (first item, count) per wave.
   // `ax`, `ay`: the ray grid (identity_warp, or the lens warp's).
-  Result<std::vector<glm::uvec2>> build_waves(const std::vector<ChunkKey>& draw, const LodView& view,
+  // `boxes`: per drawn brick, the world box its rays march (empty: none).
+  Result<std::vector<glm::uvec2>> build_waves(const std::vector<BrickBox>& boxes, const LodView& view,
                                               const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
   // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen rectangle touches it.
-  Status build_tile_lists(const std::vector<ChunkKey>& draw, const LodView& view, const WarpAxis& ax,
+  Status build_tile_lists(const std::vector<BrickBox>& boxes, const LodView& view, const WarpAxis& ax,
                           const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
@@ -259,6 +292,14 @@ class BrickRenderer final : public VolumeRenderer {
   std::tuple<glm::dvec3, glm::dvec3, glm::dvec3> rays_for_;
   glm::uvec4 rays_grid_{0};  // ray_dirs_'s grid: full sizes and warp bands
   std::vector<uint32_t> pixel_wave_;
+  // Per atlas slot: cells [lo, hi) (cell indices) of the brick `key` that may
+  // change a ray under the settings CellOpacity::hash() gave `settings`.
+  struct OccupiedCells {
+    ChunkKey key;
+    uint64_t settings = 0;  // 0: not computed
+    glm::uvec3 lo{0}, hi{0};
+  };
+  std::vector<OccupiedCells> occupied_;
   std::vector<double> value_scales_;  // per drawn channel: data units per texel unit
 };
 
