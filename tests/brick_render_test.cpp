@@ -94,6 +94,7 @@ TEST_CASE("brick render: single pass and multipass waves give the same image") {
   const Camera cam = orbit_camera(r->placement(), 200, -20, 0.9, 50);
   BrickFrameSettings f;
   f.lod.lod_bias = -0.5;
+  f.mode = BrickPassMode::kMultipass;
   BrickFrameStats ms, ss;
   const ImageRgba8 multi = converge(*r, cam, vessels(), f, 96, 96, &ms);
   f.mode = BrickPassMode::kSinglePass;

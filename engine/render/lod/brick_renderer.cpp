@@ -920,9 +920,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     const glm::dvec3 ds(ds_u[0], ds_u[1], ds_u[2]), origin = chunk_box(src_, key).lo;
     march_world[i] = {origin + local.lo * ds, origin + local.hi * ds};
   }
-  BrickPassMode mode = frame.mode != BrickPassMode::kAuto ? frame.mode
-                       : ctx_.info().is_cpu()             ? BrickPassMode::kMultipass
-                                                          : BrickPassMode::kTiled;
+  // kAuto: tiled on every device, as measured (brick_renderer.h).
+  BrickPassMode mode = frame.mode != BrickPassMode::kAuto ? frame.mode : BrickPassMode::kTiled;
   // Waves carry a ray's state in one RGBA32F texel; larger states march tiled.
   if (mode == BrickPassMode::kMultipass && !brick_state_fits_texel(s, channels())) mode = BrickPassMode::kTiled;
   const VkDeviceSize items_base = align_up(items_used_, salign);

@@ -16,17 +16,22 @@
 // barrier per brick; waves need about as many dispatches as bricks overlap
 // along a ray. kTiled: one dispatch; each 8x8 tile walks its own front-to-back
 // list of the bricks its screen rectangle touches. All three give the same
-// image. kAuto (the default) picks by device, as measured: multipass on CPU
-// devices (lavapipe: 252 ms vs tiled 296, single 2007), tiled on GPUs (H100,
-// 256x256 sparse vessels: tiled 2.0 ms, single 1.7, multipass 3.1; all 512
+// image. kAuto (the default) is tiled on every device, as measured: on
+// lavapipe (`vxr bench lod`, 256^3 sparse vessels, 256x256) tiled 7.4 ms vs
+// multipass 9.9 vs single 64.8, and `vxr bench peer` (512x512) tiled 10-40%
+// faster than the waves in every scene, whose items each load and store the
+// ray's state; on an H100 tiled 2.0 ms, single 1.7, multipass 3.1 (all 512
 // bricks drawn: tiled 1.9 ms vs multipass 7.9, where waves cost a dispatch
 // and a barrier each and the GPU idles between them).
 //
-// Empty space is skipped twice, with identical images: the traversal drops
-// bricks whose min/max maps to zero opacity (brick_may_contribute), and rays
-// jump the empty cells (~4^3 voxels, BrickCells) inside the bricks they march,
-// on the same sample grid. LodSettings::skip_empty turns both off,
-// BrickFrameSettings::skip_cells the cells only (`vxr bench peer` measures).
+// Empty space is skipped three ways, with identical images: the traversal
+// drops bricks whose min/max maps to zero opacity (brick_may_contribute);
+// E-A and emission rays march only the box of a brick's cells that may
+// change a ray (CellOpacity, march_box), and the work lists cover only that
+// box's screen rectangle; rays jump the empty cells (~4^3 voxels,
+// BrickCells) inside it, on the same sample grid. LodSettings::skip_empty
+// turns all off, BrickFrameSettings::skip_cells the boxes and cells (`vxr
+// bench peer` measures).
 // Early ray termination: emission-absorption rays stop at transmittance
 // RenderSettings::early_termination, in every pass mode.
 //
