@@ -307,4 +307,23 @@ TEST_CASE("empty-space cells: the CPU cell test keeps every cell that can reach 
   s.channels[0].enabled = false;
   const CellOpacity off(s, build_transfer_table(s), u8);
   CHECK_FALSE(off.may_contribute(0, {texel(0), texel(255)}));
+
+  // MIP: a cell below the window never raises a maximum (entry 0 transparent);
+  // one that reaches the window's low end may. MinIP: the mirror image.
+  s.channels[0].enabled = true;
+  s.channels[0].window_lo = 75;
+  s.channels[0].window_hi = 200;
+  s.channels[0].opacity_points = {{0.0, 0.0}, {1.0, 1.0}};
+  s.model = OpticalModel::kMip;
+  const CellOpacity mip(s, build_transfer_table(s), u8);
+  CHECK_FALSE(mip.may_contribute(0, {texel(0), texel(74)}));
+  CHECK(mip.may_contribute(0, {texel(0), texel(75)}));
+  CHECK(mip.hash() != ramp.hash());
+  s.model = OpticalModel::kMinIp;
+  s.channels[0].opacity_points = {{0.0, 1.0}, {1.0, 0.0}};
+  const CellOpacity minip(s, build_transfer_table(s), u8);
+  CHECK_FALSE(minip.may_contribute(0, {texel(201), texel(255)}));
+  CHECK(minip.may_contribute(0, {texel(200), texel(255)}));
+  s.model = OpticalModel::kAverage;
+  CHECK(CellOpacity(s, build_transfer_table(s), u8).may_contribute(0, {texel(201), texel(255)}));
 }

@@ -156,6 +156,8 @@ CellOpacity::CellOpacity(const RenderSettings& s, const TransferTable& table, co
   auto mix = [&h](const void* p, size_t n) {
     for (size_t i = 0; i < n; ++i) h = (h ^ static_cast<const uint8_t*>(p)[i]) * 0x100000001b3ull;
   };
+  model_ = s.model;
+  mix(&model_, sizeof(model_));
   for (size_t c = 0; c < value_scales.size(); ++c) {
     Channel ch;
     if (c < s.channels.size()) {
@@ -192,6 +194,12 @@ bool CellOpacity::may_contribute(uint32_t channel, glm::vec2 texel_range) const 
     const double u = (ch.gamma == 1.0 ? x : std::pow(x, ch.gamma)) * n;
     return std::clamp(int(upper ? std::ceil(u + kSlack) : std::floor(u - kSlack)), 0, n);
   };
+  // MIP: a cell clearly below the window (windowed 0) never raises a running
+  // maximum, and a ray that takes nothing shows entry 0; MinIP the mirror.
+  if (model_ == OpticalModel::kMip) return entry(texel_range.y, true) > 0 || ch.opaque_upto[0] > 0;
+  if (model_ == OpticalModel::kMinIp)
+    return entry(texel_range.x, false) < n || ch.opaque_upto[n] - ch.opaque_upto[n - 1] > 0;
+  if (model_ != OpticalModel::kEmissionAbsorption && model_ != OpticalModel::kEmission) return true;
   const int i0 = entry(texel_range.x, false), i1 = entry(texel_range.y, true);
   return ch.opaque_upto[i1] - (i0 > 0 ? ch.opaque_upto[i0 - 1] : 0) > 0;
 }
@@ -902,13 +910,13 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
                         "table has room for " + std::to_string((table_.size - std::min(table_.size, table_base)) /
                                                                sizeof(shader::BrickRecord)) +
                         " (of " + std::to_string(opt_.max_bricks) + "); raise the LOD bias or max_bricks");
-  // Where skipping jumps empty cells, rays of E-A and emission march only the
-  // box of a brick's kept cells, and the work lists cover only its screen
-  // rectangle: the same samples, without walking the empty margin.
+  // Where skipping jumps empty cells, rays march only the box of a brick's
+  // kept cells (every model but average and iso), and the work lists cover
+  // only its screen rectangle: the same image, without the empty margin.
   const bool skip_cells = frame.lod.skip_empty && frame.skip_cells;
-  const bool zero_alpha_skips = s.model == OpticalModel::kEmissionAbsorption || s.model == OpticalModel::kEmission;
+  const bool boxes = s.model != OpticalModel::kAverage && s.model != OpticalModel::kIsosurface;
   std::optional<CellOpacity> cell_opacity;
-  if (skip_cells && zero_alpha_skips) cell_opacity.emplace(s, tf, value_scales_);
+  if (skip_cells && boxes) cell_opacity.emplace(s, tf, value_scales_);
   std::vector<BrickBox> march_world(lod.draw.size());
   for (size_t i = 0; i < lod.draw.size(); ++i) {
     const ChunkKey& key = lod.draw[i];

@@ -26,9 +26,9 @@
 //
 // Empty space is skipped three ways, with identical images: the traversal
 // drops bricks whose min/max maps to zero opacity (brick_may_contribute);
-// E-A and emission rays march only the box of a brick's cells that may
-// change a ray (CellOpacity, march_box), and the work lists cover only that
-// box's screen rectangle; rays jump the empty cells (~4^3 voxels,
+// rays march only the box of a brick's cells that may change a ray
+// (CellOpacity, march_box; every model but average and iso), and the work
+// lists cover only that box's screen rectangle; rays jump the empty cells (~4^3 voxels,
 // BrickCells) inside it, on the same sample grid. LodSettings::skip_empty
 // turns all off, BrickFrameSettings::skip_cells the boxes and cells (`vxr
 // bench peer` measures).
@@ -127,12 +127,14 @@ bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, s
 // One channel: ranges = {[lo, hi]}.
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, double lo, double hi);
 
-// Whether an empty-space cell may change an emission or emission-absorption
-// ray (whose zero-opacity samples change nothing): the classify pass's test
-// on the CPU, in double and one table entry wider each side, so that a cell
-// it calls empty the shader's float test calls empty too. Marching only the
-// box of the cells it keeps (BrickRenderer::march_box) then gives the same
-// samples a ray that jumps the empty cells takes.
+// Whether an empty-space cell may change a ray, whatever the ray holds so
+// far: for emission and emission-absorption (whose zero-opacity samples
+// change nothing) the classify pass's test on the CPU, in double and one
+// table entry wider each side, so that a cell it calls empty the shader's
+// float test calls empty too; for MIP / MinIP brick_may_contribute's rule per
+// cell (clearly below / above the window, entry 0 / 255 transparent); other
+// models keep every cell. Marching only the box of the cells it keeps
+// (BrickRenderer::march_box) then gives the image of marching them all.
 class CellOpacity {
  public:
   // `value_scales`: per drawn channel, data units per texel unit.
@@ -149,6 +151,7 @@ class CellOpacity {
     double lo = 0, hi = 1, gamma = 1, scale = 1;
     std::vector<uint16_t> opaque_upto;  // entries 0..i with non-zero opacity
   };
+  OpticalModel model_ = OpticalModel::kEmissionAbsorption;
   std::vector<Channel> channels_;
   uint64_t hash_ = 0;
 };
@@ -238,8 +241,8 @@ class BrickRenderer final : public VolumeRenderer {
   Result<const gpu::ComputePipeline*> variant(uint32_t model, uint32_t channels, bool gradient, bool depth, bool gamma,
                                               bool naive);
   // The part of brick `key` its rays march, in its local voxels: the brick
-  // clipped to the ROI and, with `cells` (E-A and emission, cell skipping
-  // on), to the box of its cells that `cells` says may change a ray. Empty
+  // clipped to the ROI and, with `cells` (cell skipping on), to the box of
+  // its cells that `cells` says may change a ray. Empty
   // (lo >= hi on an axis) when no cell may.
   BrickBox march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in
