@@ -30,6 +30,7 @@ Result<Buffer> create_buffer(const Context& ctx, const BufferCreateInfo& info) {
       required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
       break;
     case MemoryIntent::kReadback:
+    case MemoryIntent::kHostShared:
       required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
       preferred = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
       break;

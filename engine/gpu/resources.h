@@ -1,7 +1,9 @@
 // Buffers and images with their memory, made from plain create-info structs.
 //
 // Memory intent is an enum, not raw flags: kDeviceLocal for GPU-only data,
-// kUpload for host-written staging, kReadback for host-read results.
+// kUpload for host-written staging, kReadback for host-read results,
+// kHostShared for data the host writes and also reads back (cached where the
+// device offers it: reads of write-combined memory crawl).
 #pragma once
 
 #include <vulkan/vulkan.h>
@@ -16,7 +18,7 @@
 
 namespace vxr::gpu {
 
-enum class MemoryIntent { kDeviceLocal, kUpload, kReadback };
+enum class MemoryIntent { kDeviceLocal, kUpload, kReadback, kHostShared };
 
 struct BufferCreateInfo {
   VkDeviceSize size = 0;

@@ -275,8 +275,9 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   if (uint64_t(p->capacity()) * nch * p->cells_.count() * sizeof(glm::vec2) > kMaxCellRangeBytes)
     p->cells_ = brick_cells_for(source.chunk_size(), 8);
   const uint64_t cell_bytes = uint64_t(p->capacity()) * nch * p->cells_.count() * sizeof(glm::vec2);
+  // The renderer's march boxes read them on the host too (kHostShared: cached).
   VXR_ASSIGN_OR_RETURN(p->cell_ranges_, gpu::create_buffer(ctx, {cell_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                                                 gpu::MemoryIntent::kUpload, "brick cell ranges"}));
+                                                                 gpu::MemoryIntent::kHostShared, "brick cell ranges"}));
   // Until a brick is staged its cells are "anything": never skipped.
   auto* cells = static_cast<glm::vec2*>(p->cell_ranges_.mapped);
   for (uint64_t i = 0; i < cell_bytes / sizeof(glm::vec2); ++i) cells[i] = glm::vec2(-INFINITY, INFINITY);

@@ -182,7 +182,8 @@ class BrickPool {
   uint64_t brick_bytes() const { return brick_bytes_; }  // one brick, every channel
   // Per slot and drawn channel, the cell ranges (BrickCells): vec2 at
   // ((slot * channels() + c) * cells().count() + cell). Host-visible storage
-  // buffer, written when a brick is staged.
+  // buffer (cached where the device offers it: the renderer reads it for its
+  // march boxes), written when a brick is staged.
   const BrickCells& cells() const { return cells_; }
   const gpu::Buffer& cell_ranges() const { return cell_ranges_; }
   // The slot a resident brick occupies (its index in cell_ranges()).
