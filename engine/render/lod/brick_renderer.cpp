@@ -705,11 +705,11 @@ glm::uvec4 warp_rect(const glm::uvec4& r, const WarpAxis& ax, const WarpAxis& ay
 Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<BrickBox>& boxes, const LodView& view,
                                                            const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used) {
   // Each brick becomes one work item per 8x8 tile holding a pixel whose ray
-  // hits it. A brick goes into the wave after the last wave that wrote any of
+  // hits its march box. A brick goes into the wave after the last wave that wrote any of
   // its pixels, so within a wave no two items write the same pixel (the shader
   // leaves pixels that miss its brick alone) and every pixel still sees its
   // bricks front to back across waves. Conflicts are tested per pixel (a ray
-  // against the brick's box grown by 0.1%, conservative against float error):
+  // against the march box grown by 0.1%, conservative against float error):
   // per tile, bricks that merely touch on screen would chain into as many
   // waves as bricks.
   const uint32_t w = ax.warped(), h = ay.warped();
