@@ -151,6 +151,17 @@ bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, d
   return brick_may_contribute(s, table, std::span(&r, 1));
 }
 
+namespace {
+// Per entry i of a channel's table: how many of entries 0..i have non-zero
+// opacity (any entry in i0..i1 is opaque when upto[i1] - upto[i0 - 1] > 0).
+std::array<uint16_t, VXR_TF_SIZE> opaque_entries_upto(const TransferTable& table, int channel) {
+  std::array<uint16_t, VXR_TF_SIZE> upto{};
+  uint16_t n = 0;
+  for (int i = 0; i < VXR_TF_SIZE; ++i) upto[i] = n += table.at(channel, i).a != 0.0 ? 1 : 0;
+  return upto;
+}
+}  // namespace
+
 CellOpacity::CellOpacity(const RenderSettings& s, const TransferTable& table, const std::vector<double>& value_scales) {
   uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a over what the test reads
   auto mix = [&h](const void* p, size_t n) {
@@ -166,9 +177,7 @@ CellOpacity::CellOpacity(const RenderSettings& s, const TransferTable& table, co
       ch.lo = cs.window_lo, ch.hi = cs.window_hi, ch.gamma = cs.gamma;
     }
     ch.scale = value_scales[c];
-    ch.opaque_upto.resize(VXR_TF_SIZE);
-    uint16_t n = 0;
-    for (int i = 0; i < VXR_TF_SIZE; ++i) ch.opaque_upto[i] = n += table.at(int(c), i).a != 0.0 ? 1 : 0;
+    ch.opaque_upto = opaque_entries_upto(table, int(c));
     mix(&ch.enabled, sizeof(ch.enabled));
     for (double v : {ch.lo, ch.hi, ch.gamma, ch.scale}) mix(&v, sizeof(v));
     mix(ch.opaque_upto.data(), ch.opaque_upto.size() * sizeof(uint16_t));
@@ -373,11 +382,8 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
   // opacity (the cell test asks "is any entry in i0..i1 opaque" in two fetches).
   auto* counts = static_cast<glm::vec4*>(tf_staging_.mapped) + table.rgba.size();
   for (int c = 0; c < VXR_MAX_CHANNELS; ++c) {
-    float n = 0.0f;
-    for (int i = 0; i < VXR_TF_SIZE; ++i) {
-      if (table.rgba[size_t(c) * VXR_TF_SIZE + i].a != 0.0f) n += 1.0f;
-      counts[size_t(c) * VXR_TF_SIZE + i] = glm::vec4(n, 0.0f, 0.0f, 0.0f);
-    }
+    const auto upto = opaque_entries_upto(table, c);
+    for (int i = 0; i < VXR_TF_SIZE; ++i) counts[size_t(c) * VXR_TF_SIZE + i] = glm::vec4(float(upto[i]), 0.0f, 0.0f, 0.0f);
   }
   // The previous frame's rays may still read the table; this frame's read it after the copy.
   const VkAccessFlags2 reads = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_UNIFORM_READ_BIT;

@@ -47,6 +47,7 @@
 // (BrickPoolOptions::channels).
 #pragma once
 
+#include <array>
 #include <functional>
 #include <map>
 #include <span>
@@ -149,7 +150,7 @@ class CellOpacity {
   struct Channel {
     bool enabled = false;
     double lo = 0, hi = 1, gamma = 1, scale = 1;
-    std::vector<uint16_t> opaque_upto;  // entries 0..i with non-zero opacity
+    std::array<uint16_t, VXR_TF_SIZE> opaque_upto{};  // entries 0..i with non-zero opacity
   };
   OpticalModel model_ = OpticalModel::kEmissionAbsorption;
   std::vector<Channel> channels_;
