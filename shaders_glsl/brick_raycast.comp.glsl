@@ -47,14 +47,20 @@ layout(std430, binding = 8) readonly buffer Cells { vec2 cell_range[]; };
 // its view depth; its premultiplied colour goes under the volume.
 layout(binding = 9, r32f) uniform readonly image2D under_depth;
 layout(binding = 10, rgba8) uniform readonly image2D under_color;
-// Per atlas slot and channel (cell_range's layout), each cell classified for
-// this view's settings by a VXR_BRICK_CLASSIFY pass: see cell_key.
+// Each cell classified for this view's settings by a VXR_BRICK_CLASSIFY pass
+// (see cell_key). MIP / MinIP: per atlas slot and channel (cell_range's
+// layout), the key the ray's running value is tested against. The other
+// models: per brick record, one bit per cell (set: empty), cell_words() words.
 layout(std430, binding = 11) buffer CellKeys { float cell_keys[]; };
+layout(std430, binding = 13) buffer CellBits { uint cell_bits[]; };
 // Rows 0..3 of binding 1 again (the colour and opacity entries): a uniform
 // buffer, which lavapipe (Mesa 22) reads at per-ray offsets with straight-line
 // loads, where a storage buffer load loops over the rays with a branch each
 // (same floats).
 layout(std140, binding = 12) uniform TransferRows { vec4 transfer_rows[VXR_MAX_CHANNELS * VXR_TF_SIZE]; };
+// The start of binding 13 again, as a uniform buffer (VXR_BRICK_CELL_BITS_UNIFORM), for the same reason:
+// the MRI's E-A frame at step 0.5 took 172 -> 158 ms (`vxr bench peer`).
+layout(std140, binding = 14) uniform CellBitsWindow { uvec4 cell_bits_window[VXR_CELL_BITS_WINDOW_WORDS / 4u]; };
 
 layout(push_constant) uniform Push { BrickCastParams p; };
 
@@ -182,31 +188,56 @@ float cell_key(uint slot, int cell, int c) {
   return opaque_entries_upto(c, i1) - (i0 > 0 ? opaque_entries_upto(c, i0 - 1) : 0.0);
 }
 
-// The VXR_BRICK_CLASSIFY pass: cell_key of 64 cells of one brick's slot, every enabled channel.
+const bool kReduceModel = VXR_SC_MODEL == VXR_MODEL_MIP || VXR_SC_MODEL == VXR_MODEL_MINIP;
+
+uint cell_count() { return p.pass.y * p.pass.y * p.pass.y; }
+uint cell_words() { return (cell_count() + 31u) / 32u; }
+
+// The VXR_BRICK_CLASSIFY pass, one brick per workgroup column. MIP / MinIP:
+// cell_key of 64 cells of the brick's slot, every enabled channel. The
+// others: 64 words of 32 cells each, a bit set where every enabled channel's
+// key says empty.
 void classify_cells() {
   const uint b = p.control.z + gl_WorkGroupID.x;
-  const uint count = p.pass.y * p.pass.y * p.pass.y;
-  const uint cell = gl_WorkGroupID.y * 64u + gl_LocalInvocationIndex;
-  if (b >= p.control.z + p.control.w || cell >= count || bricks[b].atlas.w < 0.0) return;
+  const uint index = gl_WorkGroupID.y * 64u + gl_LocalInvocationIndex;
+  const uint count = cell_count();
+  if (b >= p.control.z + p.control.w || bricks[b].atlas.w < 0.0) return;
   const uint slot = uint(bricks[b].atlas.w);
-  for (int c = 0; c < VXR_SC_CHANNELS; ++c)
-    if (P.window[c].w != 0.0) cell_keys[(slot * uint(VXR_SC_CHANNELS) + uint(c)) * count + cell] = cell_key(slot, int(cell), c);
+  if (kReduceModel) {
+    if (index >= count) return;
+    for (int c = 0; c < VXR_SC_CHANNELS; ++c)
+      if (P.window[c].w != 0.0) cell_keys[(slot * uint(VXR_SC_CHANNELS) + uint(c)) * count + index] = cell_key(slot, int(index), c);
+    return;
+  }
+  if (index >= cell_words()) return;
+  uint word = 0u;
+  for (uint i = 0u, cell = index * 32u; i < 32u && cell < count; ++i, ++cell) {
+    bool empty = true;
+    for (int c = 0; c < VXR_SC_CHANNELS; ++c)
+      if (P.window[c].w != 0.0 && !(cell_key(slot, int(cell), c) <= 0.0)) empty = false;
+    if (empty) word |= 1u << i;
+  }
+  cell_bits[b * cell_words() + index] = word;
 }
 
-bool cell_is_empty(uint slot, int cell, VxrRay r) {
+// `base`: the brick's first key (MIP / MinIP: slot * channels * cell_count())
+// or first bits word (the others: record * cell_words()).
+bool cell_is_empty(uint base, int cell, VxrRay r) {
   const uint m = VXR_SC_MODEL;
-  const uint count = p.pass.y * p.pass.y * p.pass.y;
+  if (!kReduceModel) {
+    const uint w = base + uint(cell) / 32u;
+    const uint word = (p.pass.z & VXR_BRICK_CELL_BITS_UNIFORM) != 0u ? cell_bits_window[w / 4u][w % 4u] : cell_bits[w];
+    return (word & (1u << (uint(cell) % 32u))) != 0u;
+  }
+  const uint count = cell_count();
   for (int c = 0; c < VXR_SC_CHANNELS; ++c) {
     if (P.window[c].w == 0.0) continue;
-    const float key = cell_keys[(slot * uint(VXR_SC_CHANNELS) + uint(c)) * count + uint(cell)];
+    const float key = cell_keys[base + uint(c) * count + uint(cell)];
     if (m == VXR_MODEL_MIP) {
       // Not above the running maximum: the maximum stays. Nothing taken yet: entry 0 must be clear.
       if (!(key <= r.reduce[c]) || (r.count == 0.0 && opaque_entries_upto(c, 0) > 0.0)) return false;
-    } else if (m == VXR_MODEL_MINIP) {
-      if (!(key >= r.reduce[c]) ||
-          (r.count == 0.0 && opaque_entries_upto(c, VXR_TF_SIZE - 1) - opaque_entries_upto(c, VXR_TF_SIZE - 2) > 0.0))
-        return false;
-    } else if (!(key <= 0.0)) {
+    } else if (!(key >= r.reduce[c]) ||
+               (r.count == 0.0 && opaque_entries_upto(c, VXR_TF_SIZE - 1) - opaque_entries_upto(c, VXR_TF_SIZE - 2) > 0.0)) {
       return false;
     }
   }
@@ -333,7 +364,9 @@ void main() {
     const int n = int(ceil(t1 / dt - offset) - i0);
     // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture).
     const bool cells = p.pass.y != 0u && bricks[b].atlas.w >= 0.0;
-    const uint slot = cells ? uint(bricks[b].atlas.w) : 0u;
+    const uint cell_base = !cells ? 0u
+                           : kReduceModel ? uint(bricks[b].atlas.w) * uint(VXR_SC_CHANNELS) * cell_count()
+                                          : b * cell_words();
     const vec3 inv_dl = 1.0 / dl;
     // Runs: a ray marches samples [k, run_end) without a test; where a run
     // ends, it jumps the empty cells ahead and finds the next run's end by
@@ -342,7 +375,7 @@ void main() {
     // them ends a run, not on nearly every sample as when each sample tested
     // its own cell. MIP / MinIP runs are one cell: their test depends on the
     // running value.
-    const bool extend = VXR_SC_MODEL != VXR_MODEL_MIP && VXR_SC_MODEL != VXR_MODEL_MINIP;
+    const bool extend = !kReduceModel;
     int k = 0, run_end = cells ? 0 : n;
     while (k < n && !ray.done) {
       if (k >= run_end) {
@@ -353,7 +386,7 @@ void main() {
           const float t = (i0 + float(kk) + offset) * dt;
           const ivec3 c3 = clamp(ivec3(floor((e + t * dl) / p.atlas_inv.w)), ivec3(0), ivec3(int(p.pass.y) - 1));
           const int cell = (c3.z * int(p.pass.y) + c3.y) * int(p.pass.y) + c3.x;
-          if (cell_is_empty(slot, cell, ray)) {
+          if (cell_is_empty(cell_base, cell, ray)) {
             if (occupied) break;  // the run ends here; its end jumps this cell
             // The first sample at or past the exit of the cell grown by a quarter
             // voxel; the ones before it lie within the half voxel its range covers.

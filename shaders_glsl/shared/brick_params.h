@@ -21,9 +21,17 @@ using uvec4 = glm::uvec4;
 #define VXR_BRICK_QUANTIZE 64u    // final pixel rounded to 8 bits, v * 255 + 0.5 (UNORM targets: the one rounding rule)
 #define VXR_BRICK_FINAL_FLOAT 128u  // final pixel into the accumulation image (float), for a blit into the target
 #define VXR_BRICK_UNDERLAY 256u   // rays end at the underlay's depth (binding 9); its colour (binding 10) goes under the volume
-// No rays: workgroup (x, y) classifies 64 empty-space cells (y * 64 ..) of brick control.z + x for
-// this view's settings into binding 11, which the rays' cell test then reads (one load per cell).
+// No rays: workgroup (x, y) classifies the empty-space cells of brick control.z + x for this
+// view's settings, which the rays' cell test then reads (one load per cell): for MIP / MinIP
+// 64 cells' keys (y * 64 ..) into binding 11, for the other models 64 words of emptiness
+// bits (y * 64 ..) into binding 13.
 #define VXR_BRICK_CLASSIFY 512u
+// The rays read the emptiness bits through binding 14 (a uniform buffer over the start of
+// binding 13), which lavapipe loads at per-ray offsets without a branch per ray. Set when
+// every brick's bits fit its range.
+#define VXR_BRICK_CELL_BITS_UNIFORM 1024u
+// Binding 14's declared size: 4096 uvec4, 64 KiB.
+#define VXR_CELL_BITS_WINDOW_WORDS 16384u
 
 // One brick to march, everything in its own local voxels (level-l voxels,
 // origin at the brick's interior corner): the CPU computes these in double,

@@ -30,6 +30,8 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {10, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // underlay colour
       {11, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell keys
       {12, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // transfer rows
+      {13, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits
+      {14, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits' window
   };
 }
 
@@ -46,7 +48,9 @@ void compute_barrier(VkCommandBuffer cmd) {
   mb.srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
   mb.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
   mb.dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
-  mb.dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
+  // Uniform reads too: the rays read the classify pass's bits through a uniform window.
+  mb.dstAccessMask =
+      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_UNIFORM_READ_BIT;
   VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
   dep.memoryBarrierCount = 1;
   dep.pMemoryBarriers = &mb;
@@ -231,7 +235,6 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   r->opt_ = options;
   if (source.apron() < 1) return invalid_argument("brick renderer: chunks need an apron of at least 1 voxel");
   VXR_ASSIGN_OR_RETURN(r->pool_, BrickPool::create(ctx, source, options.pool));
-  VXR_RETURN_IF_ERROR(r->ensure_cell_keys());
   r->value_scales_.assign(r->pool_->channels(), brick_value_scale(source.info().dtype));
   const auto b = bindings();
   r->pipes_ = options.pipelines ? options.pipelines : std::make_shared<BrickPipelines>();
@@ -289,13 +292,13 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   }));
   std::vector<VkDescriptorSet> all = r->view_sets_;
   all.push_back(r->mono_set_);
+  VXR_RETURN_IF_ERROR(r->ensure_cell_keys());
   for (VkDescriptorSet set : all) {
     gpu::write_storage_image(ctx, set, 9, r->no_under_depth_.view);
     gpu::write_storage_image(ctx, set, 10, r->no_under_color_.view);
     if (set != r->mono_set_) r->bind_atlases(set, r->pool_atlases());
     // The monolithic texture has no cells (its record says so); the binding still needs a buffer.
     gpu::write_storage_buffer(ctx, set, 8, r->pool_->cell_ranges().buffer);
-    gpu::write_storage_buffer(ctx, set, 11, r->cell_keys_.buffer);
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
     gpu::write_storage_buffer(ctx, set, 1, r->transfer_buf_.buffer);
     gpu::write_uniform_buffer(ctx, set, 12, r->transfer_buf_.buffer, tf_bytes / 2);
@@ -308,13 +311,34 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   return r;
 }
 
+uint64_t BrickRenderer::cell_bits_bytes_per_brick() const { return (pool_->cells().count() + 31) / 32 * 4; }
+
 Status BrickRenderer::ensure_cell_keys() {
-  const uint64_t bytes = uint64_t(pool_->capacity()) * pool_->channels() * pool_->cells().count() * sizeof(float);
-  if (cell_keys_.buffer && cell_keys_.size == bytes) return Status::ok();
-  // Written by each view's classify pass before its rays read it; never read elsewhere.
-  VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                                             gpu::MemoryIntent::kDeviceLocal, "brick cell keys"}));
+  const uint64_t key_bytes = uint64_t(pool_->capacity()) * pool_->channels() * pool_->cells().count() * sizeof(float);
+  const uint64_t bit_bytes = uint64_t(opt_.max_bricks) * cell_bits_bytes_per_brick();
+  // Written by each view's classify pass before its rays read them; never read elsewhere.
+  if (!cell_keys_.buffer || cell_keys_.size != key_bytes) {
+    VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {key_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                               gpu::MemoryIntent::kDeviceLocal, "brick cell keys"}));
+  }
+  if (!cell_bits_.buffer || cell_bits_.size != bit_bytes) {
+    VXR_ASSIGN_OR_RETURN(cell_bits_, gpu::create_buffer(ctx_, {bit_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                                                              VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                                               gpu::MemoryIntent::kDeviceLocal, "brick cell bits"}));
+  }
+  std::vector<VkDescriptorSet> all = view_sets_;
+  all.push_back(mono_set_);
+  for (VkDescriptorSet set : all) {
+    gpu::write_storage_buffer(ctx_, set, 11, cell_keys_.buffer);
+    gpu::write_storage_buffer(ctx_, set, 13, cell_bits_.buffer);
+    gpu::write_uniform_buffer(ctx_, set, 14, cell_bits_.buffer, cell_bits_window_bytes());
+  }
   return Status::ok();
+}
+
+uint64_t BrickRenderer::cell_bits_window_bytes() const {
+  return std::min<uint64_t>({uint64_t(VXR_CELL_BITS_WINDOW_WORDS) * 4, ctx_.limits().maxUniformBufferRange,
+                             cell_bits_.size});
 }
 
 Status BrickRenderer::pin_resident(uint32_t timepoint) {
@@ -478,8 +502,6 @@ Status BrickRenderer::rebuild_pool(uint32_t apron) {
   VXR_RETURN_IF_ERROR(ensure_cell_keys());
   for (VkDescriptorSet set : view_sets_) gpu::write_storage_buffer(ctx_, set, 8, pool_->cell_ranges().buffer);
   gpu::write_storage_buffer(ctx_, mono_set_, 8, pool_->cell_ranges().buffer);
-  for (VkDescriptorSet set : view_sets_) gpu::write_storage_buffer(ctx_, set, 11, cell_keys_.buffer);
-  gpu::write_storage_buffer(ctx_, mono_set_, 11, cell_keys_.buffer);
   // Requested bricks are keyed the same; the new pool has none of them yet.
   return pin_resident(pinned_timepoint_);
 }
@@ -609,18 +631,25 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->pipeline);
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set, 0, nullptr);
+  // The other models' cell tests read a bit per cell, through the uniform window when every brick's fit.
+  const uint32_t bits_flag =
+      cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits &&
+              bricks * cell_bits_bytes_per_brick() <= cell_bits_window_bytes()
+          ? VXR_BRICK_CELL_BITS_UNIFORM
+          : 0u;
   if (cells_per_axis > 0 && bricks > 0) {
     // The cells of the view's bricks classified once, so a ray's cell test is a load and a compare.
+    const uint64_t per_brick = reduce ? pool_->cells().count() : cell_bits_bytes_per_brick() / 4;  // keys / words
     p.control = glm::uvec4(0, 0, 0, bricks);
     p.pass = glm::uvec4(0, cells_per_axis, VXR_BRICK_CLASSIFY, 0);
     vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
-    vkCmdDispatch(cmd, bricks, (pool_->cells().count() + 63) / 64, 1);
+    vkCmdDispatch(cmd, bricks, uint32_t((per_brick + 63) / 64), 1);
     ++dispatches;
     compute_barrier(cmd);
   }
   auto dispatch = [&](uint32_t first, uint32_t count, uint32_t flags) {
     p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), first, count);
-    p.pass = glm::uvec4(0, cells_per_axis, flags, 0);
+    p.pass = glm::uvec4(0, cells_per_axis, flags | bits_flag, 0);
     vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
     vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
     ++dispatches;
@@ -637,7 +666,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
       for (uint32_t done = 0; done < wave.y; done += max_groups) {
         p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), 0, 0);
         p.pass = glm::uvec4(wave.x + done, cells_per_axis,
-                            under | VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM, 0);
+                            under | VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM | bits_flag, 0);
         vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
         vkCmdDispatch(cmd, std::min(max_groups, wave.y - done), 1, 1);
         ++dispatches;

@@ -94,6 +94,11 @@ struct BrickRendererOptions {
   // fits in half the pool, upload and pin them all at create(), so every
   // frame draws at full detail from the first (and deterministically).
   bool preload_if_fits = false;
+  // The E-A / emission / average / iso cell tests read each cell's emptiness
+  // bit through a uniform buffer while the frame's bricks fit its range (64
+  // KiB: 128 bricks of 64^3 in 4-voxel cells), else through a storage
+  // buffer. False: always the storage buffer (tests pin that both agree).
+  bool uniform_cell_bits = true;
   // Shared with other renderers on the same context (they must outlive none
   // of its frames); null: this renderer's own.
   std::shared_ptr<BrickPipelines> pipelines;
@@ -226,8 +231,13 @@ class BrickRenderer final : public VolumeRenderer {
   Status ensure_accum(uint32_t width, uint32_t height);
   // Records the transfer table's upload when it changed (once per frame at most).
   Status record_transfer(VkCommandBuffer cmd, const TransferTable& table);
-  // The cell-key buffer (brick_raycast.comp binding 11) sized for the pool.
+  // The classify pass's outputs sized for the pool and table: cell keys
+  // (brick_raycast.comp binding 11) and emptiness bits (13, and 14 over its
+  // start); written into every descriptor set.
   Status ensure_cell_keys();
+  uint64_t cell_bits_bytes_per_brick() const;
+  // Bytes of the bits binding 14 sees (the shader's declared size, the device's range, the buffer).
+  uint64_t cell_bits_window_bytes() const;
   // Rebuilds the pool with `apron` (waits for the device; rebinds every set).
   Status rebuild_pool(uint32_t apron);
   // The frame's timepoint: its top level pinned (begin_frame, before any copy is recorded).
@@ -282,7 +292,7 @@ class BrickRenderer final : public VolumeRenderer {
   gpu::Image no_under_depth_, no_under_color_;  // 1x1, bound where a view has no underlay
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
-  gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_;
+  gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
   gpu::Handle<VkQueryPool> timestamps_;  // render(): two per frame; null without timestamps
   VkDeviceSize params_stride_ = 0;
   // This frame: views recorded, and the table / work-list entries they took.
