@@ -94,7 +94,7 @@ struct BrickRendererOptions {
   // fits in half the pool, upload and pin them all at create(), so every
   // frame draws at full detail from the first (and deterministically).
   bool preload_if_fits = false;
-  // The E-A / emission / average / iso cell tests read each cell's emptiness
+  // The E-A and emission cell tests read each cell's emptiness
   // bit through a uniform buffer while the frame's bricks fit its range (64
   // KiB: 128 bricks of 64^3 in 4-voxel cells), else through a storage
   // buffer. False: always the storage buffer (tests pin that both agree).
