@@ -31,6 +31,19 @@ std::unique_ptr<ProceduralSource> sparse_vessels(uint64_t side) {
   return std::move(r).value();
 }
 
+// The vessels' settings for the on/off identity tests: step 0.5, hot, dense enough to terminate rays.
+RenderSettings vessel_settings(OpticalModel model) {
+  RenderSettings s;
+  s.model = model;
+  s.channels[0].colormap = "hot";
+  // MinIP: a window inside the vessels' values, so the minimum is not the background.
+  s.channels[0].window_lo = model == OpticalModel::kMinIp ? 0 : 8;
+  s.channels[0].window_hi = 200;
+  s.step_voxels = 0.5;
+  s.density = 0.3;
+  return s;
+}
+
 ImageRgba8 converge(BrickRenderer& r, const Camera& cam, const RenderSettings& s, const BrickFrameSettings& f,
                     uint32_t w, uint32_t h, BrickFrameStats* st) {
   for (int i = 0; i < 64; ++i) {
@@ -246,14 +259,7 @@ TEST_CASE("empty-space cells: images with skipping on and off are bit-identical 
   const BrickPassMode modes[] = {BrickPassMode::kMultipass, BrickPassMode::kTiled};
   for (OpticalModel model : models) {
     for (BrickPassMode mode : modes) {
-      RenderSettings s;
-      s.model = model;
-      s.channels[0].colormap = "hot";
-      // MinIP: a window inside the vessels' values, so the minimum is not the background.
-      s.channels[0].window_lo = model == OpticalModel::kMinIp ? 0 : 8;
-      s.channels[0].window_hi = 200;
-      s.step_voxels = 0.5;
-      s.density = 0.3;
+      const RenderSettings s = vessel_settings(model);
       BrickFrameSettings f;
       f.lod.force_level = 0;
       f.mode = mode;
@@ -292,13 +298,7 @@ TEST_CASE("empty-space cells: the cell bits read through the uniform window and 
   const Camera cam = orbit_camera((*uniform)->placement(), 30, 25, 1.25);
   for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission}) {
     for (BrickPassMode mode : {BrickPassMode::kMultipass, BrickPassMode::kTiled}) {
-      RenderSettings s;
-      s.model = model;
-      s.channels[0].colormap = "hot";
-      s.channels[0].window_lo = 8;
-      s.channels[0].window_hi = 200;
-      s.step_voxels = 0.5;
-      s.density = 0.3;
+      const RenderSettings s = vessel_settings(model);
       BrickFrameSettings f;
       f.lod.force_level = 0;
       f.mode = mode;
