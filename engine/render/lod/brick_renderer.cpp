@@ -238,7 +238,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   r->value_scales_.assign(r->pool_->channels(), brick_value_scale(source.info().dtype));
   const auto b = bindings();
   r->pipes_ = options.pipelines ? options.pipelines : std::make_shared<BrickPipelines>();
-  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant(VXR_MODEL_EMISSION_ABSORPTION, 1, false, false, false, false));
+  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant(VXR_MODEL_EMISSION_ABSORPTION, 1, false, false, false, false, true));
   if (options.max_views == 0) return invalid_argument("brick renderer: max_views must be at least 1");
   VXR_ASSIGN_OR_RETURN(r->desc_pool_, gpu::create_descriptor_pool(ctx, b, options.max_views + 1));
   VXR_ASSIGN_OR_RETURN(r->mono_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_->set_layout));
@@ -422,20 +422,20 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
   return Status::ok();
 }
 
-Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model) {
-  // Specialisation constants: raycast_core.glsl ids 100..105.
+Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model, bool cells) {
+  // Specialisation constants: raycast_core.glsl ids 100..105, brick_raycast.comp 106.
   const uint32_t n = channels();
   const bool gradient = s.gradient_opacity.enabled, depth = s.depth_color != DepthColorMode::kOff;
   bool gamma = false;
   for (uint32_t c = 0; c < n && c < s.channels.size(); ++c) gamma = gamma || s.channels[c].gamma != 1.0;
   const bool naive = !s.opacity_correction;
-  return variant(model, n, gradient, depth, gamma, naive);
+  return variant(model, n, gradient, depth, gamma, naive, cells);
 }
 
 Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint32_t n, bool gradient, bool depth,
-                                                           bool gamma, bool naive) {
+                                                           bool gamma, bool naive, bool cells) {
   const uint32_t key = model | (n << 4) | (gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u) |
-                       (gamma ? 1u << 10 : 0u) | (naive ? 1u << 11 : 0u);
+                       (gamma ? 1u << 10 : 0u) | (naive ? 1u << 11 : 0u) | (cells ? 1u << 12 : 0u);
   std::map<uint32_t, gpu::ComputePipeline>& variants = pipes_->variants;
   if (auto it = variants.find(key); it != variants.end()) return &it->second;
   VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p,
@@ -445,7 +445,8 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint3
                                                             {102, gradient ? 1u : 0u},
                                                             {103, depth ? 1u : 0u},
                                                             {104, gamma ? 1u : 0u},
-                                                            {105, naive ? 1u : 0u}}}));
+                                                            {105, naive ? 1u : 0u},
+                                                            {106, cells ? 1u : 0u}}}));
   return &variants.emplace(key, std::move(p)).first->second;
 }
 
@@ -582,7 +583,6 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                                   uint32_t w, uint32_t h, uint32_t bricks, const glm::uvec3& atlas_texels,
                                   BrickPassMode mode, const std::vector<glm::uvec2>& waves, const RenderTarget& target,
                                   bool skip_cells, uint32_t* dispatches_out) {
-  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model));
   // RGBA8 UNORM with a storage view: the rays write it. Anything else (BGRA,
   // sRGB, float, no storage usage): final float pixels go to the
   // accumulation image and one blit converts them into the target's format.
@@ -613,6 +613,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   const bool cells = skip_cells && (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION ||
                                     (reduce && pool_->cells().cell_size >= 2.0 * s.step_voxels));
   const uint32_t cells_per_axis = cells ? pool_->cells().cells_per_axis : 0u;
+  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model, cells));
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(pool_->cells().cell_size));
   if (target.warp_x.active() || target.warp_y.active())

@@ -246,11 +246,12 @@ class BrickRenderer final : public VolumeRenderer {
   Status pin_resident(uint32_t timepoint);
   void bind_atlases(VkDescriptorSet set, const std::vector<const gpu::Image*>& atlases);
   std::vector<const gpu::Image*> pool_atlases() const;
-  // The pipeline specialised for the settings (model: VXR_MODEL_*, channels, features).
-  Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model);
+  // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
+  // features) and for whether its dispatches use empty-space cells.
+  Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, bool cells);
   // The variant for these specialisation constants, built on first use.
   Result<const gpu::ComputePipeline*> variant(uint32_t model, uint32_t channels, bool gradient, bool depth, bool gamma,
-                                              bool naive);
+                                              bool naive, bool cells);
   // The part of brick `key` its rays march, in its local voxels: the brick
   // clipped to the ROI and, with `cells` (cell skipping on), to the box of
   // its cells that `cells` says may change a ray. Empty
