@@ -170,10 +170,27 @@ float opaque_entries_upto(int c, int i) { return transfer_table[(VXR_MAX_CHANNEL
 //   mip: x1 (plus a margin): the cell is empty for a ray whose maximum is at least that;
 //   minip: x0 (minus a margin): empty for a ray whose minimum is at most that;
 //   others: how many table entries the lookup can reach have non-zero opacity (0: empty).
+// The range of walked cell `cell` (p.pass.y per axis) from the pool's cells
+// (p.pass.w per axis, as many or twice as many): the union of those it covers.
+vec2 walk_cell_range(uint slot, int cell, int c) {
+  const uint n = p.pass.y, fine = p.pass.w;
+  const uint base = (slot * uint(VXR_SC_CHANNELS) + uint(c)) * fine * fine * fine;
+  if (fine == n) return cell_range[base + uint(cell)];
+  const uvec3 c3 = uvec3(uint(cell) % n, (uint(cell) / n) % n, uint(cell) / (n * n)) * 2u;
+  vec2 r = vec2(1.0 / 0.0, -1.0 / 0.0);
+  for (uint i = 0u; i < 8u; ++i) {
+    const uvec3 f = c3 + uvec3(i & 1u, (i >> 1u) & 1u, i >> 2u);
+    if (all(lessThan(f, uvec3(fine)))) {
+      const vec2 q = cell_range[base + (f.z * fine + f.y) * fine + f.x];
+      r = vec2(min(r.x, q.x), max(r.y, q.y));
+    }
+  }
+  return r;
+}
+
 float cell_key(uint slot, int cell, int c) {
   const uint m = VXR_SC_MODEL;
-  const uint count = p.pass.y * p.pass.y * p.pass.y;
-  const vec2 range = cell_range[(slot * uint(VXR_SC_CHANNELS) + uint(c)) * count + uint(cell)];
+  const vec2 range = walk_cell_range(slot, cell, c);
   // Windowing (and gamma) is monotonic: the range's ends bound every sample's value.
   const float x0 = vxr_normalise(P, vec4(range.x))[c], x1 = vxr_normalise(P, vec4(range.y))[c];
   // MIP / MinIP: a gamma's pow may not be monotonic in the last ulp, so

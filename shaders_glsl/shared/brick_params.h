@@ -51,7 +51,8 @@ struct BrickRecord {
 // binding 7), filled by plan_raycast/pack_params.
 struct BrickCastParams {
   uvec4 control;   // xy: output pixel of the ray at (0, 0) (a rectangle of the target); z: first brick, w: brick count (single pass)
-  uvec4 pass;      // x: work-item base with VXR_BRICK_WORK_ITEMS, y: empty-space cells per brick axis (0: off), z: flags
+  uvec4 pass;      // x: work-item base with VXR_BRICK_WORK_ITEMS, y: empty-space cells per brick axis the rays walk (0: off),
+                   // z: flags, w: the pool's cells per axis (cell ranges; y or 2y: a walked cell is 2x2x2 of them)
   vec4 atlas_inv;  // xyz: 1 / atlas size in texels, w: empty-space cell size in voxels
   uvec4 warp;      // lens warp (z > 1): x, y: rays across each outer band along x, y; z: pixels per ray there
 };

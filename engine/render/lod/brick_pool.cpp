@@ -54,7 +54,7 @@ void convert_to_texels(DType dtype, const uint8_t* in, size_t n, uint8_t* out) {
 
 BrickCells brick_cells_for(uint32_t chunk_size, uint32_t cell_voxels) {
   BrickCells c;
-  c.cells_per_axis = std::clamp((chunk_size + cell_voxels - 1) / cell_voxels, 1u, 16u);
+  c.cells_per_axis = std::clamp((chunk_size + cell_voxels - 1) / cell_voxels, 1u, 32u);
   c.cell_size = (chunk_size + c.cells_per_axis - 1) / c.cells_per_axis;
   return c;
 }
@@ -269,12 +269,21 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
                             VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
     }
   }));
-  p->slot_.resize(p->capacity());
-  for (uint32_t i = p->capacity(); i-- > 0;) p->free_.push_back(i);
-  p->cells_ = brick_cells_for(source.chunk_size());
-  if (uint64_t(p->capacity()) * nch * p->cells_.count() * sizeof(glm::vec2) > kMaxCellRangeBytes)
-    p->cells_ = brick_cells_for(source.chunk_size(), 8);
-  const uint64_t cell_bytes = uint64_t(p->capacity()) * nch * p->cells_.count() * sizeof(glm::vec2);
+  // Slots handed out: no more than the source has bricks (every level and
+  // timepoint), so a small volume's cells can be finer for the same memory.
+  uint64_t bricks = 0;
+  for (const LevelInfo& li : source.levels())
+    bricks += uint64_t(li.chunk_counts[0]) * li.chunk_counts[1] * li.chunk_counts[2];
+  bricks *= std::max<uint32_t>(source.info().timepoints, 1);
+  const uint32_t usable = uint32_t(std::min<uint64_t>(p->capacity(), std::max<uint64_t>(bricks, 1)));
+  p->slot_.resize(usable);
+  for (uint32_t i = usable; i-- > 0;) p->free_.push_back(i);
+  // The finest cells whose ranges fit kMaxCellRangeBytes: 2 voxels, 4, else 8.
+  for (uint32_t voxels : {2u, 4u, 8u}) {
+    p->cells_ = brick_cells_for(source.chunk_size(), voxels);
+    if (uint64_t(usable) * nch * p->cells_.count() * sizeof(glm::vec2) <= kMaxCellRangeBytes) break;
+  }
+  const uint64_t cell_bytes = uint64_t(usable) * nch * p->cells_.count() * sizeof(glm::vec2);
   // The renderer's march boxes read them on the host too (kHostShared: cached).
   VXR_ASSIGN_OR_RETURN(p->cell_ranges_, gpu::create_buffer(ctx, {cell_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                                  gpu::MemoryIntent::kHostShared, "brick cell ranges"}));
