@@ -77,7 +77,11 @@ template <typename T>
 void cell_min_max(const T* in, uint32_t edge, uint32_t n, const std::vector<uint32_t>& lo,
                   const std::vector<uint32_t>& hi, std::vector<T>& out_lo, std::vector<T>& out_hi) {
   const size_t plane = size_t(edge) * edge;
-  std::vector<T> zlo(n * plane), zhi(n * plane);  // [cz][y][x]
+  // Scratch kept per thread: every element is written before it is read, and
+  // a fresh allocation of this size (~150 KiB per u8 brick in 2-voxel cells)
+  // costs page faults and zeroing on every brick staged.
+  static thread_local std::vector<T> zlo, zhi, ylo, yhi;
+  zlo.resize(n * plane), zhi.resize(n * plane);  // [cz][y][x]
   for (uint32_t c = 0; c < n; ++c) {
     T* l = zlo.data() + c * plane;
     T* h = zhi.data() + c * plane;
@@ -91,7 +95,7 @@ void cell_min_max(const T* in, uint32_t edge, uint32_t n, const std::vector<uint
       }
     }
   }
-  std::vector<T> ylo(size_t(n) * n * edge), yhi(size_t(n) * n * edge);  // [cz][cy][x]
+  ylo.resize(size_t(n) * n * edge), yhi.resize(size_t(n) * n * edge);  // [cz][cy][x]
   for (uint32_t cz = 0; cz < n; ++cz)
     for (uint32_t c = 0; c < n; ++c) {
       T* l = ylo.data() + (size_t(cz) * n + c) * edge;
