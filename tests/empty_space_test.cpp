@@ -284,6 +284,30 @@ TEST_CASE("empty-space cells: images with skipping on and off are bit-identical 
   }
 }
 
+TEST_CASE("empty-space cells: a pool uses 2-voxel cells where the slots its source can fill allow, else 4") {
+  test::GpuTestScope scope;
+  BrickPoolOptions o;
+  o.slots = {8, 8, 8};
+  // 128^3 in 32^3 chunks: 64 + 8 + 1 bricks, 73 slots of ranges at 2 voxels (16^3 cells each).
+  auto small = sparse_vessels(128);
+  auto a = BrickPool::create(test::gpu_context(), *small, o);
+  REQUIRE(a.is_ok());
+  CHECK((*a)->cells().cell_size == 2);
+  CHECK((*a)->cells().cells_per_axis == 16);
+  CHECK((*a)->cell_ranges().size == 73ull * 4096 * sizeof(glm::vec2));
+  // 1024^3 in 64^3 chunks: more bricks than the 512 slots, whose 2-voxel ranges
+  // (512 * 32^3 cells) would pass kMaxCellRangeBytes; 4-voxel ones do not.
+  ProceduralOptions po;
+  po.dims = {1024, 1024, 1024};
+  po.chunk_size = 64;
+  auto big_src = ProceduralSource::create(po);
+  REQUIRE(big_src.is_ok());
+  auto b = BrickPool::create(test::gpu_context(), **big_src, o);
+  REQUIRE(b.is_ok());
+  CHECK((*b)->cells().cell_size == 4);
+  CHECK((*b)->cell_ranges().size == 512ull * 4096 * sizeof(glm::vec2));
+}
+
 TEST_CASE("empty-space cells: the cell bits read through the uniform window and the storage buffer agree") {
   test::GpuTestScope scope;
   auto src = sparse_vessels(128);
