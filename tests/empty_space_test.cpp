@@ -308,6 +308,43 @@ TEST_CASE("empty-space cells: a pool uses 2-voxel cells where the slots its sour
   CHECK((*b)->cell_ranges().size == 512ull * 4096 * sizeof(glm::vec2));
 }
 
+TEST_CASE("empty-space cells: walking 2-voxel cells or 2x2x2 groups of them gives the image without skipping") {
+  test::GpuTestScope scope;
+  auto src = sparse_vessels(128);
+  BrickRendererOptions ro;
+  ro.pool.slots = {8, 8, 8};
+  ro.pipelines = std::make_shared<BrickPipelines>();
+  ro.cell_walk = BrickCellWalk::kCells;
+  auto cells = BrickRenderer::create(test::gpu_context(), *src, ro);
+  ro.cell_walk = BrickCellWalk::kGroups;
+  auto groups = BrickRenderer::create(test::gpu_context(), *src, ro);
+  REQUIRE(cells.is_ok());
+  REQUIRE(groups.is_ok());
+  REQUIRE((*cells)->pool().cells().cell_size == 2);
+  const Camera cam = orbit_camera((*cells)->placement(), 30, 25, 1.25);
+  for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission}) {
+    for (BrickPassMode mode : {BrickPassMode::kMultipass, BrickPassMode::kTiled}) {
+      const RenderSettings s = vessel_settings(model);
+      BrickFrameSettings f;
+      f.lod.force_level = 0;
+      f.mode = mode;
+      BrickFrameStats a_stats, b_stats, off_stats;
+      const ImageRgba8 a = converge(**cells, cam, s, f, 96, 96, &a_stats);
+      const ImageRgba8 b = converge(**groups, cam, s, f, 96, 96, &b_stats);
+      f.lod.skip_empty = false;
+      const ImageRgba8 off = converge(**groups, cam, s, f, 96, 96, &off_stats);
+      const std::string what = std::string(optical_model_name(model)) + (mode == BrickPassMode::kTiled ? " tiled" : " multipass");
+      INFO(what);
+      CHECK(test::looks_non_blank(a));
+      CHECK(a.pixels == off.pixels);
+      CHECK(b.pixels == off.pixels);
+      // Finer cells skip more.
+      CHECK(a_stats.samples < b_stats.samples);
+      CHECK(b_stats.samples < off_stats.samples);
+    }
+  }
+}
+
 TEST_CASE("empty-space cells: the cell bits read through the uniform window and the storage buffer agree") {
   test::GpuTestScope scope;
   auto src = sparse_vessels(128);

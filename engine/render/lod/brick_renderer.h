@@ -79,6 +79,11 @@ struct BrickPipelines {
   std::map<uint32_t, gpu::ComputePipeline> variants;
 };
 
+// Which cells E-A and emission rays walk where the pool's are 2 voxels: the
+// cells or 2x2x2 groups of them, by record_view's count per frame (kAuto), or
+// fixed (tests pin that both give the image without skipping).
+enum class BrickCellWalk { kAuto, kCells, kGroups };
+
 struct BrickRendererOptions {
   BrickPoolOptions pool;
   uint32_t max_bricks = 16384;         // brick-table capacity per frame (all views together)
@@ -99,6 +104,7 @@ struct BrickRendererOptions {
   // KiB: 128 bricks of 64^3 in 4-voxel cells), else through a storage
   // buffer. False: always the storage buffer (tests pin that both agree).
   bool uniform_cell_bits = true;
+  BrickCellWalk cell_walk = BrickCellWalk::kAuto;
   // Shared with other renderers on the same context (they must outlive none
   // of its frames); null: this renderer's own.
   std::shared_ptr<BrickPipelines> pipelines;
@@ -256,17 +262,24 @@ class BrickRenderer final : public VolumeRenderer {
   // clipped to the ROI and, with `cells` (cell skipping on), to the box of
   // its cells that `cells` says may change a ray. Empty
   // (lo >= hi on an axis) when no cell may.
-  BrickBox march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells);
+  // Adds to `walk_split` the empty cells in 2x2x2 groups that keep some cell
+  // (what walking cells instead of groups could skip), to `walk_groups` the
+  // groups meeting the box of kept cells (what a walk may cross).
+  BrickBox march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells,
+                     uint64_t* walk_split = nullptr, uint64_t* walk_groups = nullptr);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in
   // texels; `box`: march_box, local voxels).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
                    const LodSettings& clip, const BrickBox& box) const;
   // Records one view's dispatches with `set` and writes the result into `target`.
-  // `skip_cells`: rays jump the empty cells of each brick (BrickCells).
+  // Which empty-space cells the rays walk: none, the pool's (BrickCells), or
+  // groups of 2x2x2 of them where the pool's are smaller than 4 voxels
+  // (MIP / MinIP always walk those; E-A and emission as record_view decides).
+  enum class CellWalk { kOff, kCells, kGroups };
   // `model`: the packed parameters' VXR_MODEL_* (control.x).
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
-                     const std::vector<glm::uvec2>& waves, const RenderTarget& target, bool skip_cells,
+                     const std::vector<glm::uvec2>& waves, const RenderTarget& target, CellWalk cells,
                      uint32_t* dispatches);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
   // `dst` (capacity entries); returns (first item, count) per wave.
@@ -318,6 +331,7 @@ class BrickRenderer final : public VolumeRenderer {
     ChunkKey key;
     uint64_t settings = 0;  // 0: not computed
     glm::uvec3 lo{0}, hi{0};
+    uint32_t split = 0, boxed_groups = 0;  // march_box's walk_split, walk_groups for this brick
   };
   std::vector<OccupiedCells> occupied_;
   std::vector<double> value_scales_;  // per drawn channel: data units per texel unit
