@@ -308,75 +308,78 @@ TEST_CASE("empty-space cells: a pool uses 2-voxel cells where the slots its sour
   CHECK((*b)->cell_ranges().size == 512ull * 4096 * sizeof(glm::vec2));
 }
 
-TEST_CASE("empty-space cells: walking 2-voxel cells or 2x2x2 groups of them gives the image without skipping") {
-  test::GpuTestScope scope;
+namespace {
+
+// The vessels (E-A and emission, multipass and tiled) drawn by two renderers
+// made with `first` and `second`, and by the second with skipping off.
+struct VariantFrames {
+  std::string what;
+  ImageRgba8 a, b, off;
+  uint64_t a_samples = 0, b_samples = 0, off_samples = 0;
+};
+std::vector<VariantFrames> vessel_variants(BrickRendererOptions first, BrickRendererOptions second) {
   auto src = sparse_vessels(128);
-  BrickRendererOptions ro;
-  ro.pool.slots = {8, 8, 8};
-  ro.pipelines = std::make_shared<BrickPipelines>();
-  ro.cell_walk = BrickCellWalk::kCells;
-  auto cells = BrickRenderer::create(test::gpu_context(), *src, ro);
-  ro.cell_walk = BrickCellWalk::kGroups;
-  auto groups = BrickRenderer::create(test::gpu_context(), *src, ro);
-  REQUIRE(cells.is_ok());
-  REQUIRE(groups.is_ok());
-  REQUIRE((*cells)->pool().cells().cell_size == 2);
-  const Camera cam = orbit_camera((*cells)->placement(), 30, 25, 1.25);
+  first.pool.slots = second.pool.slots = {8, 8, 8};
+  first.pipelines = second.pipelines = std::make_shared<BrickPipelines>();
+  auto ra = BrickRenderer::create(test::gpu_context(), *src, first);
+  auto rb = BrickRenderer::create(test::gpu_context(), *src, second);
+  REQUIRE(ra.is_ok());
+  REQUIRE(rb.is_ok());
+  REQUIRE((*ra)->pool().cells().cell_size == 2);
+  const Camera cam = orbit_camera((*ra)->placement(), 30, 25, 1.25);
+  std::vector<VariantFrames> out;
   for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission}) {
     for (BrickPassMode mode : {BrickPassMode::kMultipass, BrickPassMode::kTiled}) {
       const RenderSettings s = vessel_settings(model);
       BrickFrameSettings f;
       f.lod.force_level = 0;
       f.mode = mode;
-      BrickFrameStats a_stats, b_stats, off_stats;
-      const ImageRgba8 a = converge(**cells, cam, s, f, 96, 96, &a_stats);
-      const ImageRgba8 b = converge(**groups, cam, s, f, 96, 96, &b_stats);
+      VariantFrames v;
+      v.what = std::string(optical_model_name(model)) + (mode == BrickPassMode::kTiled ? " tiled" : " multipass");
+      BrickFrameStats st;
+      v.a = converge(**ra, cam, s, f, 96, 96, &st);
+      v.a_samples = st.samples;
+      v.b = converge(**rb, cam, s, f, 96, 96, &st);
+      v.b_samples = st.samples;
       f.lod.skip_empty = false;
-      const ImageRgba8 off = converge(**groups, cam, s, f, 96, 96, &off_stats);
-      const std::string what = std::string(optical_model_name(model)) + (mode == BrickPassMode::kTiled ? " tiled" : " multipass");
-      INFO(what);
-      CHECK(test::looks_non_blank(a));
-      CHECK(a.pixels == off.pixels);
-      CHECK(b.pixels == off.pixels);
-      // Finer cells skip more.
-      CHECK(a_stats.samples < b_stats.samples);
-      CHECK(b_stats.samples < off_stats.samples);
+      v.off = converge(**rb, cam, s, f, 96, 96, &st);
+      v.off_samples = st.samples;
+      out.push_back(std::move(v));
     }
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("empty-space cells: walking 2-voxel cells or 2x2x2 groups of them gives the image without skipping") {
+  test::GpuTestScope scope;
+  BrickRendererOptions cells, groups;
+  cells.cell_walk = BrickCellWalk::kCells;
+  groups.cell_walk = BrickCellWalk::kGroups;
+  for (const VariantFrames& v : vessel_variants(cells, groups)) {
+    INFO(v.what);
+    CHECK(test::looks_non_blank(v.a));
+    CHECK(v.a.pixels == v.off.pixels);
+    CHECK(v.b.pixels == v.off.pixels);
+    // Finer cells skip more.
+    CHECK(v.a_samples < v.b_samples);
+    CHECK(v.b_samples < v.off_samples);
   }
 }
 
 TEST_CASE("empty-space cells: the cell bits read through the uniform window and the storage buffer agree") {
   test::GpuTestScope scope;
-  auto src = sparse_vessels(128);
-  BrickRendererOptions ro;
-  ro.pool.slots = {8, 8, 8};
-  ro.pipelines = std::make_shared<BrickPipelines>();
-  auto uniform = BrickRenderer::create(test::gpu_context(), *src, ro);
-  ro.uniform_cell_bits = false;
-  auto storage = BrickRenderer::create(test::gpu_context(), *src, ro);
-  REQUIRE(uniform.is_ok());
-  REQUIRE(storage.is_ok());
-  const Camera cam = orbit_camera((*uniform)->placement(), 30, 25, 1.25);
-  for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission}) {
-    for (BrickPassMode mode : {BrickPassMode::kMultipass, BrickPassMode::kTiled}) {
-      const RenderSettings s = vessel_settings(model);
-      BrickFrameSettings f;
-      f.lod.force_level = 0;
-      f.mode = mode;
-      BrickFrameStats a_stats, b_stats, off_stats;
-      const ImageRgba8 a = converge(**uniform, cam, s, f, 96, 96, &a_stats);
-      const ImageRgba8 b = converge(**storage, cam, s, f, 96, 96, &b_stats);
-      f.skip_cells = false;
-      const ImageRgba8 off = converge(**storage, cam, s, f, 96, 96, &off_stats);
-      const std::string what = std::string(optical_model_name(model)) + (mode == BrickPassMode::kTiled ? " tiled" : " multipass");
-      INFO(what);
-      CHECK(test::looks_non_blank(a));
-      CHECK(a.pixels == b.pixels);
-      CHECK(a.pixels == off.pixels);
-      // The same cells jumped either way, and some were.
-      CHECK(a_stats.samples == b_stats.samples);
-      CHECK(a_stats.samples < off_stats.samples);
-    }
+  BrickRendererOptions uniform, storage;
+  storage.uniform_cell_bits = false;
+  for (const VariantFrames& v : vessel_variants(uniform, storage)) {
+    INFO(v.what);
+    CHECK(test::looks_non_blank(v.a));
+    CHECK(v.a.pixels == v.b.pixels);
+    CHECK(v.a.pixels == v.off.pixels);
+    // The same cells jumped either way, and some were.
+    CHECK(v.a_samples == v.b_samples);
+    CHECK(v.a_samples < v.off_samples);
   }
 }
 
