@@ -101,8 +101,9 @@ struct BrickRendererOptions {
   bool preload_if_fits = false;
   // The E-A and emission cell tests read each cell's emptiness
   // bit through a uniform buffer while the frame's bricks fit its range (64
-  // KiB: 128 bricks of 64^3 in 4-voxel cells), else through a storage
-  // buffer. False: always the storage buffer (tests pin that both agree).
+  // KiB: 128 bricks of 64^3 in 4-voxel cells, 16 in 2-voxel ones), else
+  // through a storage buffer. False: always the storage buffer (tests pin
+  // that both agree).
   bool uniform_cell_bits = true;
   BrickCellWalk cell_walk = BrickCellWalk::kAuto;
   // Shared with other renderers on the same context (they must outlive none
