@@ -48,10 +48,10 @@ layout(std430, binding = 8) readonly buffer Cells { vec2 cell_range[]; };
 // its view depth; its premultiplied colour goes under the volume.
 layout(binding = 9, r32f) uniform readonly image2D under_depth;
 layout(binding = 10, rgba8) uniform readonly image2D under_color;
-// Each cell classified for this view's settings by a VXR_BRICK_CLASSIFY pass
-// (see cell_key). MIP / MinIP: per atlas slot and channel (cell_range's
-// layout), the key the ray's running value is tested against. The other
-// models: per brick record, one bit per cell (set: empty), cell_words() words.
+// Each walked cell (p.pass.y per axis) classified for this view's settings
+// by a VXR_BRICK_CLASSIFY pass (see cell_key). MIP / MinIP: per atlas slot,
+// channel and cell, the key the ray's running value is tested against. E-A
+// and emission: per brick record, one bit per cell (set: empty), cell_words() words.
 layout(std430, binding = 11) buffer CellKeys { float cell_keys[]; };
 layout(std430, binding = 13) buffer CellBits { uint cell_bits[]; };
 // Rows 0..3 of binding 1 again (the colour and opacity entries): a uniform
