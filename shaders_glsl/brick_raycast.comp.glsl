@@ -217,9 +217,9 @@ uint cell_count() { return p.pass.y * p.pass.y * p.pass.y; }
 uint cell_words() { return (cell_count() + 31u) / 32u; }
 
 // The VXR_BRICK_CLASSIFY pass, one brick per workgroup column. MIP / MinIP:
-// cell_key of 64 cells of the brick's slot, every enabled channel. The
-// others: 64 words of 32 cells each, a bit set where every enabled channel's
-// key says empty.
+// cell_key of 64 cells of the brick's slot, every enabled channel. E-A and
+// emission: 64 words of 32 cells each, a bit set where every enabled
+// channel's key says empty.
 void classify_cells() {
   const uint b = p.control.z + gl_WorkGroupID.x;
   const uint index = gl_WorkGroupID.y * 64u + gl_LocalInvocationIndex;
@@ -244,7 +244,7 @@ void classify_cells() {
 }
 
 // `base`: the brick's first key (MIP / MinIP: slot * channels * cell_count())
-// or first bits word (the others: record * cell_words()).
+// or first bits word (E-A, emission: record * cell_words()).
 bool cell_is_empty(uint base, int cell, VxrRay r) {
   const uint m = VXR_SC_MODEL;
   if (!kReduceModel) {
@@ -308,17 +308,6 @@ bool segment(uint b, vec3 dir, out float t0, out float t1) {
     else if (num < 0.0) return false;
   }
   return t1 > t0;
-}
-
-// Sample k of a brick's grid (t = (i0 + k + offset) * dt, from the index: no
-// drift), a segment dt level-0 voxels long.
-void march_sample(inout VxrRay ray, vec3 e, vec3 dl, vec3 dir, float i0, int k, float offset, float dt,
-                  inout uint taken) {
-  const float t = (i0 + float(k) + offset) * dt;
-  vxr_step(ray, P, e, dl, t, dt);
-  ++taken;
-  // The crossing's normal needs its brick's voxels: shade it now.
-  if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
 }
 
 // Lens warp, one axis: warped pixel coordinate q (n rays, `edge` per outer
@@ -448,7 +437,13 @@ void main() {
       for (;; ++k) {
         const bool in_run = k < run_end && !ray.done;
         if (group_runs ? !subgroupAny(in_run) : !in_run) break;
-        if (k < n && !ray.done) march_sample(ray, e, dl, dir, i0, k, offset, dt, taken);
+        if (!(k < n && !ray.done)) continue;
+        // From the index: no drift. The segment is dt level-0 voxels long.
+        const float t = (i0 + float(k) + offset) * dt;
+        vxr_step(ray, P, e, dl, t, dt);
+        ++taken;
+        // The crossing's normal needs its brick's voxels: shade it now.
+        if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
       }
     }
   }

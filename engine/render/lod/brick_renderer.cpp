@@ -45,6 +45,9 @@ BrickCells walk_cells(const BrickCells& pool, bool reduce) {
   return {(pool.cells_per_axis + 1) / 2, pool.cell_size * 2};
 }
 
+// One brick record's emptiness bits (brick_raycast.comp cell_words()) for walked cells `walk`.
+uint64_t cell_bits_bytes(const BrickCells& walk) { return (walk.count() + 31) / 32 * 4; }
+
 glm::vec4 v4(const glm::dvec3& v, double w = 0.0) {
   return glm::vec4(static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z), static_cast<float>(w));
 }
@@ -321,13 +324,10 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   return r;
 }
 
-uint64_t BrickRenderer::cell_bits_bytes_per_brick() const { return (pool_->cells().count() + 31) / 32 * 4; }
-uint64_t cell_bits_bytes(const BrickCells& walk) { return (walk.count() + 31) / 32 * 4; }
-
 Status BrickRenderer::ensure_cell_keys() {
   const uint64_t key_bytes =
       uint64_t(pool_->capacity()) * pool_->channels() * walk_cells(pool_->cells(), true).count() * sizeof(float);
-  const uint64_t bit_bytes = uint64_t(opt_.max_bricks) * cell_bits_bytes_per_brick();
+  const uint64_t bit_bytes = uint64_t(opt_.max_bricks) * cell_bits_bytes(pool_->cells());  // the finest walk
   // Written by each view's classify pass before its rays read them; never read elsewhere.
   if (!cell_keys_.buffer || cell_keys_.size != key_bytes) {
     VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {key_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
@@ -550,7 +550,8 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
   if (oc.settings != cells->hash() || !(oc.key == key)) {
     const uint32_t n = pool_->cells().cells_per_axis, count = pool_->cells().count();
     const auto* ranges = static_cast<const glm::vec2*>(pool_->cell_ranges().mapped);
-    std::vector<uint8_t> kept(count, 0);
+    std::vector<uint8_t>& kept = kept_scratch_;  // reused: settings changes recompute every drawn brick
+    kept.assign(count, 0);
     glm::uvec3 lo(n), hi(0);
     for (uint32_t z = 0; z < n; ++z)
       for (uint32_t y = 0; y < n; ++y)
@@ -667,7 +668,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->pipeline);
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set, 0, nullptr);
-  // The other models' cell tests read a bit per cell, through the uniform window when every brick's fit.
+  // E-A and emission cell tests read a bit per cell, through the uniform window when every brick's fit.
   const uint32_t bits_flag =
       cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits &&
               bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes()
@@ -1040,8 +1041,9 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   // whichever is cheaper by a rough count: the cells let a ray skip the
   // samples of the empty cells in groups it would march (cell size / step
   // each), the groups take one walk step per group crossed instead of about
-  // two, and a walk step costs about a sample (`vxr bench peer`: the MRI
-  // walks cells, a dense volume and the sparse vessels groups).
+  // two, and a walk step costs about a sample. The MRI and the sparse
+  // vessels walk cells (`vxr bench peer`), a dense volume groups (`vxr bench
+  // roofline`).
   CellWalk walk = CellWalk::kOff;
   if (skip_cells) {
     const double skipped = double(split) * pool_->cells().cell_size / s.step_voxels;

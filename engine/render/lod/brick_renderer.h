@@ -242,7 +242,6 @@ class BrickRenderer final : public VolumeRenderer {
   // (brick_raycast.comp binding 11) and emptiness bits (13, and 14 over its
   // start); written into every descriptor set.
   Status ensure_cell_keys();
-  uint64_t cell_bits_bytes_per_brick() const;
   // Bytes of the bits binding 14 sees (the shader's declared size, the device's range, the buffer).
   uint64_t cell_bits_window_bytes() const;
   // Rebuilds the pool with `apron` (waits for the device; rebinds every set).
@@ -335,6 +334,7 @@ class BrickRenderer final : public VolumeRenderer {
     uint32_t split = 0, boxed_groups = 0;  // march_box's walk_split, walk_groups for this brick
   };
   std::vector<OccupiedCells> occupied_;
+  std::vector<uint8_t> kept_scratch_;  // march_box: which cells a brick keeps
   std::vector<double> value_scales_;  // per drawn channel: data units per texel unit
 };
 
