@@ -383,6 +383,76 @@ TEST_CASE("empty-space cells: the cell bits read through the uniform window and 
   }
 }
 
+TEST_CASE("empty-space cells: the classification is kept while its inputs stay, and redone when any changes") {
+  test::GpuTestScope scope;
+  auto src = sparse_vessels(128);
+  BrickRendererOptions ro;
+  ro.pool.slots = {8, 8, 8};
+  ro.pipelines = std::make_shared<BrickPipelines>();
+  auto made = BrickRenderer::create(test::gpu_context(), *src, ro);
+  REQUIRE(made.is_ok());
+  BrickRenderer& r = **made;
+  BrickFrameSettings f;
+  f.lod.force_level = 0;
+  f.mode = BrickPassMode::kTiled;
+  const Camera near_cam = orbit_camera(r.placement(), 30, 25, 1.25);
+  // Each step changes one input of the cells' bits. A stale classification
+  // jumps other cells than a fresh one: a renderer that has drawn nothing
+  // else must take the same samples and give the same pixels.
+  RenderSettings wide = vessel_settings(OpticalModel::kEmissionAbsorption);
+  RenderSettings narrow = wide;
+  narrow.channels[0].window_lo = 120;  // fewer voxels above the window: more cells empty
+  RenderSettings ramp = wide;
+  ramp.channels[0].opacity_points = {{0.0, 0.0}, {0.5, 0.0}, {1.0, 1.0}};  // the low half transparent
+  // The same bricks drawn (every vessel brick reaches above both); the
+  // transparent values end at 99 instead of 104: only the window changes.
+  RenderSettings ramp_low = ramp;
+  ramp_low.channels[0].window_hi = 190;
+  RenderSettings ramp_shifted = ramp_low;  // the same again, the table alone changes: transparent to 103
+  ramp_shifted.channels[0].opacity_points[1].x = 0.52;
+  struct Step {
+    const char* what;
+    RenderSettings s;
+    Camera cam;
+    bool same_bricks = false;  // as the step before: only the cells can change
+  };
+  RenderSettings mip = wide;
+  mip.model = OpticalModel::kMip;
+  const Step steps[] = {{"narrow window", narrow, near_cam},
+                        {"wide window", wide, near_cam},
+                        {"opacity ramp", ramp, near_cam},
+                        {"ramp, lower window top", ramp_low, near_cam, true},
+                        {"ramp shifted", ramp_shifted, near_cam, true},
+                        {"other camera", ramp_low, orbit_camera(r.placement(), 120, -10, 1.1)},
+                        {"mip", mip, near_cam},
+                        {"ea after mip", wide, near_cam}};
+  uint64_t drawn_before = 0;
+  for (const Step& step : steps) {
+    INFO(std::string(step.what));
+    auto fresh = BrickRenderer::create(test::gpu_context(), *src, ro);
+    REQUIRE(fresh.is_ok());
+    BrickFrameStats first, again, first_fresh, off;
+    f.lod.skip_empty = true;
+    const ImageRgba8 a = converge(r, step.cam, step.s, f, 96, 96, &first);
+    const ImageRgba8 b = converge(r, step.cam, step.s, f, 96, 96, &again);
+    const ImageRgba8 c = converge(**fresh, step.cam, step.s, f, 96, 96, &first_fresh);
+    f.lod.skip_empty = false;
+    const ImageRgba8 d = converge(r, step.cam, step.s, f, 96, 96, &off);
+    CHECK(test::looks_non_blank(a));
+    CHECK(a.pixels == c.pixels);
+    CHECK(b.pixels == c.pixels);
+    CHECK(a.pixels == d.pixels);
+    CHECK(first.samples == first_fresh.samples);
+    CHECK(again.samples == first_fresh.samples);
+    CHECK(first.samples < off.samples);
+    // The first frame classified, the repeated one marched only (tiled: one dispatch).
+    CHECK(first.dispatches == 2);
+    CHECK(again.dispatches == 1);
+    if (step.same_bricks) CHECK(first.lod.drawn == drawn_before);
+    drawn_before = first.lod.drawn;
+  }
+}
+
 TEST_CASE("empty-space cells: the CPU cell test keeps every cell that can reach an opaque table entry") {
   // A ramp from the window's low end (VTK's usual opacity), u8 texels: a cell
   // below the window reaches entry 0 only (transparent); one whose top

@@ -328,7 +328,8 @@ Status BrickRenderer::ensure_cell_keys() {
   const uint64_t key_bytes =
       uint64_t(pool_->capacity()) * pool_->channels() * walk_cells(pool_->cells(), true).count() * sizeof(float);
   const uint64_t bit_bytes = uint64_t(opt_.max_bricks) * cell_bits_bytes(pool_->cells());  // the finest walk
-  // Written by each view's classify pass before its rays read them; never read elsewhere.
+  // Written by a view's classify pass before its rays read them; never read elsewhere.
+  classified_.reset();  // a new pool's ranges, or new buffers
   if (!cell_keys_.buffer || cell_keys_.size != key_bytes) {
     VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {key_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                                gpu::MemoryIntent::kDeviceLocal, "brick cell keys"}));
@@ -616,7 +617,7 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
 Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
                                   uint32_t w, uint32_t h, uint32_t bricks, const glm::uvec3& atlas_texels,
                                   BrickPassMode mode, const std::vector<glm::uvec2>& waves, const RenderTarget& target,
-                                  CellWalk cell_walk, uint32_t* dispatches_out) {
+                                  CellWalk cell_walk, CellClassInputs* classify, uint32_t* dispatches_out) {
   // RGBA8 UNORM with a storage view: the rays write it. Anything else (BGRA,
   // sRGB, float, no storage usage): final float pixels go to the
   // accumulation image and one blit converts them into the target's format.
@@ -674,7 +675,15 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
               bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes()
           ? VXR_BRICK_CELL_BITS_UNIFORM
           : 0u;
-  if (cells_per_axis > 0 && bricks > 0) {
+  bool classified = false;
+  if (cells_per_axis > 0 && bricks > 0 && classify) {
+    classify->model = model;
+    classify->walked_cells = cells_per_axis;
+    classify->range_cells = range_cells_per_axis;
+    classified = classified_ && *classified_ == *classify;
+    classified_ = std::move(*classify);
+  }
+  if (cells_per_axis > 0 && bricks > 0 && !classified) {
     // The cells of the view's bricks classified once, so a ray's cell test is a load and a compare.
     const uint64_t per_brick = reduce ? walk.count() : cell_bits_bytes(walk) / 4;  // keys / words
     p.control = glm::uvec4(0, 0, 0, bricks);
@@ -1045,14 +1054,19 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   // vessels walk cells (`vxr bench peer`), a dense volume groups (`vxr bench
   // roofline`).
   CellWalk walk = CellWalk::kOff;
+  CellClassInputs classify;
   if (skip_cells) {
+    classify.records.reserve(lod.draw.size());
+    for (const ChunkKey& key : lod.draw) classify.records.emplace_back(key, pool_->slot_of(key));
+    std::copy(std::begin(params.window), std::end(params.window), classify.window.begin());
+    classify.table = tf.rgba;
     const double skipped = double(split) * pool_->cells().cell_size / s.step_voxels;
     walk = pool_->cells().cell_size < 4 && skipped > double(groups) ? CellWalk::kCells : CellWalk::kGroups;
     if (opt_.cell_walk != BrickCellWalk::kAuto)
       walk = opt_.cell_walk == BrickCellWalk::kCells ? CellWalk::kCells : CellWalk::kGroups;
   }
   VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),
-                                  pool_->atlas_texels(), mode, waves, target, walk, &st.dispatches));
+                                  pool_->atlas_texels(), mode, waves, target, walk, &classify, &st.dispatches));
   ++views_;
   table_used_ = table_base + table_bytes;
   items_used_ = items_base + items_bytes;
@@ -1264,7 +1278,7 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
     gpu::write_storage_image(ctx_, mono_set_, 2, target_.view);
     gpu::write_storage_image(ctx_, mono_set_, 3, accum_.view);
     recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
-                           BrickPassMode::kSinglePass, {}, target, CellWalk::kOff, &st.dispatches);
+                           BrickPassMode::kSinglePass, {}, target, CellWalk::kOff, nullptr, &st.dispatches);
   }));
   VXR_RETURN_IF_ERROR(recorded);
   st.render_ms = ms_since(t0);

@@ -50,8 +50,9 @@
 #include <array>
 #include <functional>
 #include <map>
-#include <span>
 #include <memory>
+#include <optional>
+#include <span>
 #include <tuple>
 #include <vector>
 
@@ -63,7 +64,6 @@
 #include "render/camera.h"
 #include "render/lod/brick_pool.h"
 #include "render/lod/lod_traversal.h"
-#include "core/image.h"
 #include "render/transfer_function.h"
 #include "render/volume_renderer.h"
 #include "shared/raycast_params.h"
@@ -276,11 +276,23 @@ class BrickRenderer final : public VolumeRenderer {
   // groups of 2x2x2 of them where the pool's are smaller than 4 voxels
   // (MIP / MinIP always walk those; E-A and emission as record_view decides).
   enum class CellWalk { kOff, kCells, kGroups };
-  // `model`: the packed parameters' VXR_MODEL_* (control.x).
+  // What a classify pass's cell bits (E-A, emission: per brick record) or
+  // keys (MIP / MinIP: per slot) depend on. The buffers keep the last pass's
+  // results, so a view whose inputs equal them (a still camera, an idle
+  // `vxr view`, a benchmark's repeated frames) skips the pass.
+  struct CellClassInputs {
+    std::vector<std::pair<ChunkKey, uint32_t>> records;  // per brick record: its key and slot (the ranges read)
+    std::array<glm::vec4, VXR_MAX_CHANNELS> window{};   // RaycastParams::window
+    std::vector<glm::vec4> table;                         // the transfer table
+    uint32_t model = 0, walked_cells = 0, range_cells = 0;
+    bool operator==(const CellClassInputs&) const = default;
+  };
+  // `model`: the packed parameters' VXR_MODEL_* (control.x). `classify`: the
+  // view's records, window and table (null: no cells walked).
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
                      const std::vector<glm::uvec2>& waves, const RenderTarget& target, CellWalk cells,
-                     uint32_t* dispatches);
+                     CellClassInputs* classify, uint32_t* dispatches);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
   // `dst` (capacity entries); returns (first item, count) per wave.
   // `ax`, `ay`: the ray grid (identity_warp, or the lens warp's).
@@ -307,6 +319,7 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
+  std::optional<CellClassInputs> classified_;  // what cell_keys_ / cell_bits_ hold (none: nothing known)
   gpu::Handle<VkQueryPool> timestamps_;  // render(): two per frame; null without timestamps
   VkDeviceSize params_stride_ = 0;
   // This frame: views recorded, and the table / work-list entries they took.
