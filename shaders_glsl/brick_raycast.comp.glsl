@@ -267,8 +267,8 @@ bool cell_is_empty(uint base, int cell, VxrRay r) {
   return true;
 }
 
-// Where the ray leaves cell `cell` grown by `grow` voxels, in t units
-// (`inv`: 1 / the ray's direction in local voxels).
+// Where the ray leaves cell `cell` grown by `grow` voxels, in sample
+// indices before the shift (`inv`: 1 / the step's displacement in local voxels).
 float cell_exit(ivec3 cell, vec3 e, vec3 inv, float grow) {
   const float s = p.atlas_inv.w;
   const vec3 lo = vec3(cell) * s - grow, hi = vec3(cell + 1) * s + grow;
@@ -390,7 +390,9 @@ void main() {
     const uint cell_base = !cells ? 0u
                            : kReduceModel ? uint(bricks[b].atlas.w) * uint(VXR_SC_CHANNELS) * cell_count()
                                           : b * cell_words();
-    const vec3 inv_dl = 1.0 / dl;
+    // The walk in sample indices: sample k of this brick is at e + (k + shift) * step.
+    const vec3 inv_step = 1.0 / (dl * dt);
+    const float shift = i0 + offset, inv_cell = 1.0 / p.atlas_inv.w;
     // Runs: a ray marches samples [k, run_end) without a test; where a run
     // ends, it jumps the empty cells ahead and finds the next run's end by
     // walking the occupied cells (cell tests only). The rays of a SIMD group
@@ -408,18 +410,18 @@ void main() {
         while (kk < n) {
           // From the index: no drift.
           const float t = (i0 + float(kk) + offset) * dt;
-          const ivec3 c3 = clamp(ivec3(floor((e + t * dl) / p.atlas_inv.w)), ivec3(0), ivec3(int(p.pass.y) - 1));
+          const ivec3 c3 = clamp(ivec3(floor((e + t * dl) * inv_cell)), ivec3(0), ivec3(int(p.pass.y) - 1));
           const int cell = (c3.z * int(p.pass.y) + c3.y) * int(p.pass.y) + c3.x;
           if (cell_is_empty(cell_base, cell, ray)) {
             if (occupied) break;  // the run ends here; its end jumps this cell
             // The first sample at or past the exit of the cell grown by a quarter
             // voxel; the ones before it lie within the half voxel its range covers.
-            kk = max(kk + 1, int(ceil(cell_exit(c3, e, inv_dl, 0.25) / dt - offset - i0)));
+            kk = max(kk + 1, int(ceil(cell_exit(c3, e, inv_step, 0.25) - shift)));
             k = kk;
           } else {
             occupied = true;
             // Taking samples is always right: no margin needed.
-            kk = max(kk + 1, int(ceil(cell_exit(c3, e, inv_dl, 0.0) / dt - offset - i0)));
+            kk = max(kk + 1, int(ceil(cell_exit(c3, e, inv_step, 0.0) - shift)));
             if (!extend) break;
           }
         }
