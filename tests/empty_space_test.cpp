@@ -284,6 +284,42 @@ TEST_CASE("empty-space cells: images with skipping on and off are bit-identical 
   }
 }
 
+TEST_CASE("empty-space cells: the cell walk keeps the image for rays along the axes and from inside the volume") {
+  test::GpuTestScope scope;
+  auto src = sparse_vessels(128);
+  BrickRendererOptions ro;
+  ro.pool.slots = {8, 8, 8};
+  auto made = BrickRenderer::create(test::gpu_context(), *src, ro);
+  REQUIRE(made.is_ok());
+  BrickRenderer& r = **made;
+  // 97x97: the middle row and column have a zero direction component, the
+  // centre pixel two (the walk's exits along those axes are infinite).
+  struct View {
+    const char* what;
+    Camera cam;
+  };
+  const View views[] = {{"along x", orbit_camera(r.placement(), 0, 0)},
+                        {"along y", orbit_camera(r.placement(), 90, 0)},
+                        {"eye inside", orbit_camera(r.placement(), 20, 10, 0.2)}};
+  for (const View& v : views) {
+    for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kMip}) {
+      const std::string what = std::string(v.what) + " " + optical_model_name(model);
+      INFO(what);
+      const RenderSettings s = vessel_settings(model);
+      BrickFrameSettings f;
+      f.lod.force_level = 0;
+      f.mode = BrickPassMode::kTiled;
+      BrickFrameStats on, off;
+      const ImageRgba8 a = converge(r, v.cam, s, f, 97, 97, &on);
+      f.lod.skip_empty = false;
+      const ImageRgba8 b = converge(r, v.cam, s, f, 97, 97, &off);
+      CHECK(test::looks_non_blank(a));
+      CHECK(a.pixels == b.pixels);
+      CHECK(on.samples < off.samples);
+    }
+  }
+}
+
 TEST_CASE("empty-space cells: a pool uses 2-voxel cells where the slots its source can fill allow, else 4") {
   test::GpuTestScope scope;
   BrickPoolOptions o;
