@@ -31,6 +31,14 @@ std::unique_ptr<ProceduralSource> sparse_vessels(uint64_t side) {
   return std::move(r).value();
 }
 
+// A renderer over `src` (which must outlive it) with a pool of 8x8x8 slots.
+std::unique_ptr<BrickRenderer> small_pool_renderer(const ChunkSource& src, BrickRendererOptions ro = {}) {
+  ro.pool.slots = {8, 8, 8};
+  auto made = BrickRenderer::create(test::gpu_context(), src, ro);
+  REQUIRE(made.is_ok());
+  return std::move(made).value();
+}
+
 // The vessels' settings for the on/off identity tests: step 0.5, hot, dense enough to terminate rays.
 RenderSettings vessel_settings(OpticalModel model) {
   RenderSettings s;
@@ -167,11 +175,8 @@ TEST_CASE("empty-space cells: bit-identical with a gamma and with a transfer fun
   // transparent band inside the window, so cells inside the vessels can be empty too.
   test::GpuTestScope scope;
   auto src = sparse_vessels(128);
-  BrickRendererOptions ro;
-  ro.pool.slots = {8, 8, 8};
-  auto made = BrickRenderer::create(test::gpu_context(), *src, ro);
-  REQUIRE(made.is_ok());
-  BrickRenderer& r = **made;
+  auto made = small_pool_renderer(*src);
+  BrickRenderer& r = *made;
   const Camera cam = orbit_camera(r.placement(), 120, -30, 1.1);
   for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kMip}) {
     for (int variant = 0; variant < 2; ++variant) {
@@ -248,11 +253,8 @@ TEST_CASE("empty-space cells: a cell whose range reaches one table entry into th
 TEST_CASE("empty-space cells: images with skipping on and off are bit-identical for every model that skips") {
   test::GpuTestScope scope;
   auto src = sparse_vessels(128);
-  BrickRendererOptions ro;
-  ro.pool.slots = {8, 8, 8};
-  auto made = BrickRenderer::create(test::gpu_context(), *src, ro);
-  REQUIRE(made.is_ok());
-  BrickRenderer& r = **made;
+  auto made = small_pool_renderer(*src);
+  BrickRenderer& r = *made;
   const Camera cam = orbit_camera(r.placement(), 30, 25, 1.25);
   const OpticalModel models[] = {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
                                  OpticalModel::kMinIp};
@@ -287,11 +289,8 @@ TEST_CASE("empty-space cells: images with skipping on and off are bit-identical 
 TEST_CASE("empty-space cells: the cell walk keeps the image for rays along the axes and from inside the volume") {
   test::GpuTestScope scope;
   auto src = sparse_vessels(128);
-  BrickRendererOptions ro;
-  ro.pool.slots = {8, 8, 8};
-  auto made = BrickRenderer::create(test::gpu_context(), *src, ro);
-  REQUIRE(made.is_ok());
-  BrickRenderer& r = **made;
+  auto made = small_pool_renderer(*src);
+  BrickRenderer& r = *made;
   // 97x97: the middle row and column have a zero direction component, the
   // centre pixel two (the walk's exits along those axes are infinite).
   struct View {
@@ -423,11 +422,9 @@ TEST_CASE("empty-space cells: the classification is kept while its inputs stay, 
   test::GpuTestScope scope;
   auto src = sparse_vessels(128);
   BrickRendererOptions ro;
-  ro.pool.slots = {8, 8, 8};
   ro.pipelines = std::make_shared<BrickPipelines>();
-  auto made = BrickRenderer::create(test::gpu_context(), *src, ro);
-  REQUIRE(made.is_ok());
-  BrickRenderer& r = **made;
+  auto made = small_pool_renderer(*src, ro);
+  BrickRenderer& r = *made;
   BrickFrameSettings f;
   f.lod.force_level = 0;
   f.mode = BrickPassMode::kTiled;
@@ -465,13 +462,12 @@ TEST_CASE("empty-space cells: the classification is kept while its inputs stay, 
   uint64_t drawn_before = 0;
   for (const Step& step : steps) {
     INFO(std::string(step.what));
-    auto fresh = BrickRenderer::create(test::gpu_context(), *src, ro);
-    REQUIRE(fresh.is_ok());
+    auto fresh = small_pool_renderer(*src, ro);
     BrickFrameStats first, again, first_fresh, off;
     f.lod.skip_empty = true;
     const ImageRgba8 a = converge(r, step.cam, step.s, f, 96, 96, &first);
     const ImageRgba8 b = converge(r, step.cam, step.s, f, 96, 96, &again);
-    const ImageRgba8 c = converge(**fresh, step.cam, step.s, f, 96, 96, &first_fresh);
+    const ImageRgba8 c = converge(*fresh, step.cam, step.s, f, 96, 96, &first_fresh);
     f.lod.skip_empty = false;
     const ImageRgba8 d = converge(r, step.cam, step.s, f, 96, 96, &off);
     CHECK(test::looks_non_blank(a));
