@@ -457,8 +457,8 @@ void main() {
         // A 3D DDA from sample k's cell: a step is compares and adds, where
         // finding each cell from a sample's position and computing its exit
         // cost about twice as much. Two cells a step: the second cell's test
-        // does not wait for the first's (MRI E-A at step 0.5: 126-130 ms
-        // against 131-141 a cell a step and 133-140 before the DDA).
+        // does not wait for the first's (MRI E-A at step 0.5: 125-130 ms
+        // against 130-134 a cell a step and 130-141 before the DDA).
         const float t = (i0 + float(k) + offset) * dt;  // from the index: no drift
         const float s = p.atlas_inv.w;
         CellWalk w;
