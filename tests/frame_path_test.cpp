@@ -172,6 +172,57 @@ TEST_CASE("volume renderer: two views into halves of one image in one command bu
   CHECK(diff == 0);
 }
 
+TEST_CASE("volume renderer: each view of a frame keeps its own cell classification, and one view's pass never stales another's") {
+  test::GpuTestScope scope;
+  auto src = vessels_source(128);
+  auto r = make_renderer(*src);
+  const Camera left = orbit_camera(r->placement(), 10, 0), right = orbit_camera(r->placement(), 80, 30);
+  Target both = make_target(VK_FORMAT_R8G8B8A8_UNORM, 64, 32, true);
+  RenderTarget l = both.rt(), rr = both.rt();
+  l.rect = {{0, 0}, {32, 32}};
+  rr.rect = {{32, 0}, {32, 32}};
+  // Per view: E-A (bits in the view's region) with two windows, then MIP
+  // (keys per slot, shared by the views) with two windows, so each view's
+  // pass rewrites keys the other one read.
+  RenderSettings ea_near = vessels(), ea_far = vessels(), mip_low = vessels(), mip_high = vessels();
+  ea_far.channels[0].window_lo = 60;
+  mip_low.model = mip_high.model = OpticalModel::kMip;
+  mip_high.channels[0].window_lo = 60;
+  const struct {
+    const char* what;
+    RenderSettings left, right;
+    uint32_t repeat_dispatches;  // per view, in the frames after the first (tiled: the march, plus 1 to classify)
+  } cases[] = {{"e-a, one window", ea_near, ea_near, 1}, {"e-a, two windows", ea_near, ea_far, 1},
+               {"mip, two windows", mip_low, mip_high, 2}, {"mip, one window", mip_low, mip_low, 1}};
+  for (const auto& c : cases) {
+    INFO(std::string(c.what));
+    const ImageRgba8 a = converged(*r, left, c.left, 32, 32), b = converged(*r, right, c.right, 32, 32);
+    for (int frame = 0; frame < 3; ++frame) {
+      BrickFrameStats sl, sr;
+      Status recorded = Status::ok();
+      REQUIRE(test::gpu_context().submit_and_wait([&](VkCommandBuffer cmd) {
+        recorded = r->begin_frame(cmd, {});
+        if (recorded) recorded = r->record_view(cmd, left, c.left, {}, l, &sl);
+        if (recorded) recorded = r->record_view(cmd, right, c.right, {}, rr, &sr);
+      }).is_ok());
+      REQUIRE(recorded.is_ok());
+      if (frame > 0) {
+        CHECK(sl.dispatches == c.repeat_dispatches);
+        CHECK(sr.dispatches == c.repeat_dispatches);
+      }
+      const std::vector<uint8_t> px = read_back(both.image);
+      int diff = 0;
+      for (uint32_t y = 0; y < 32; ++y)
+        for (uint32_t x = 0; x < 64; ++x)
+          for (int ch = 0; ch < 4; ++ch) {
+            const uint8_t want = x < 32 ? a.at(x, y)[ch] : b.at(x - 32, y)[ch];
+            diff += px[(size_t(y) * 64 + x) * 4 + ch] != want;
+          }
+      CHECK(diff == 0);
+    }
+  }
+}
+
 TEST_CASE("volume renderer: new poses and sizes build no pipeline and read nothing back") {
   test::GpuTestScope scope;
   auto src = vessels_source(128);

@@ -327,9 +327,11 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
 Status BrickRenderer::ensure_cell_keys() {
   const uint64_t key_bytes =
       uint64_t(pool_->capacity()) * pool_->channels() * walk_cells(pool_->cells(), true).count() * sizeof(float);
-  const uint64_t bit_bytes = uint64_t(opt_.max_bricks) * cell_bits_bytes(pool_->cells());  // the finest walk
+  // The finest walk's bits for every record of a frame, each view's region aligned for its descriptors.
+  const uint64_t bit_bytes =
+      uint64_t(opt_.max_bricks) * cell_bits_bytes(pool_->cells()) + uint64_t(opt_.max_views) * cell_bits_align();
   // Written by a view's classify pass before its rays read them; never read elsewhere.
-  classified_.reset();  // a new pool's ranges, or new buffers
+  classified_.assign(opt_.max_views, std::nullopt);  // a new pool's ranges, or new buffers
   if (!cell_keys_.buffer || cell_keys_.size != key_bytes) {
     VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {key_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                                gpu::MemoryIntent::kDeviceLocal, "brick cell keys"}));
@@ -344,14 +346,31 @@ Status BrickRenderer::ensure_cell_keys() {
   for (VkDescriptorSet set : all) {
     gpu::write_storage_buffer(ctx_, set, 11, cell_keys_.buffer);
     gpu::write_storage_buffer(ctx_, set, 13, cell_bits_.buffer);
-    gpu::write_uniform_buffer(ctx_, set, 14, cell_bits_.buffer, cell_bits_window_bytes());
+    gpu::write_uniform_buffer(ctx_, set, 14, cell_bits_.buffer, cell_bits_window_bytes(0));
   }
   return Status::ok();
 }
 
-uint64_t BrickRenderer::cell_bits_window_bytes() const {
+uint64_t BrickRenderer::cell_bits_window_bytes(uint64_t offset) const {
   return std::min<uint64_t>({uint64_t(VXR_CELL_BITS_WINDOW_WORDS) * 4, ctx_.limits().maxUniformBufferRange,
-                             cell_bits_.size});
+                             cell_bits_.size - std::min(offset, cell_bits_.size)});
+}
+
+uint64_t BrickRenderer::cell_bits_align() const {
+  return std::max<uint64_t>({16, ctx_.limits().minStorageBufferOffsetAlignment,
+                             ctx_.limits().minUniformBufferOffsetAlignment});
+}
+
+void BrickRenderer::forget_overwritten(uint32_t view, const CellClassInputs& written) {
+  for (uint32_t v = 0; v < classified_.size(); ++v) {
+    std::optional<CellClassInputs>& other = classified_[v];
+    if (v == view || !other) continue;
+    const bool keys_differ = written.writes_keys() && other->writes_keys() && !written.same_keys(*other);
+    const bool bits_meet = !written.writes_keys() && !other->writes_keys() &&
+                           written.bits_offset < other->bits_offset + other->bits_bytes &&
+                           other->bits_offset < written.bits_offset + written.bits_bytes;
+    if (keys_differ || bits_meet) other.reset();
+  }
 }
 
 Status BrickRenderer::pin_resident(uint32_t timepoint) {
@@ -671,8 +690,8 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set, 0, nullptr);
   // E-A and emission cell tests read a bit per cell, through the uniform window when every brick's fit.
   const uint32_t bits_flag =
-      cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits &&
-              bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes()
+      cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits && classify &&
+              bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes(classify->bits_offset)
           ? VXR_BRICK_CELL_BITS_UNIFORM
           : 0u;
   bool classified = false;
@@ -680,8 +699,10 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
     classify->model = model;
     classify->walked_cells = cells_per_axis;
     classify->range_cells = range_cells_per_axis;
-    classified = classified_ && *classified_ == *classify;
-    classified_ = std::move(*classify);
+    std::optional<CellClassInputs>& mine = classified_[views_];
+    classified = mine && *mine == *classify;
+    if (!classified) forget_overwritten(views_, *classify);
+    mine = std::move(*classify);
   }
   if (cells_per_axis > 0 && bricks > 0 && !classified) {
     // The cells of the view's bricks classified once, so a ray's cell test is a load and a compare.
@@ -906,7 +927,7 @@ Status BrickRenderer::begin_frame(VkCommandBuffer cmd, const BrickFrameSettings&
   VXR_RETURN_IF_ERROR(ensure_timepoint(frame.lod.timepoint));
   retired_.clear();  // the caller waited for the frame that used them
   views_ = 0;
-  table_used_ = items_used_ = 0;
+  table_used_ = items_used_ = bits_used_ = 0;
   tf_recorded_ = false;
   requests_.clear();
   std::memset(counters_.mapped, 0, 16);
@@ -1046,6 +1067,12 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   gpu::write_storage_buffer(ctx_, set, 4, table_.buffer, table_bytes, table_base);
   gpu::write_storage_buffer(ctx_, set, 6, items_.buffer, items_bytes, items_base);
   gpu::write_uniform_buffer(ctx_, set, 7, params_.buffer, sizeof(shader::RaycastParams), params_offset);
+  // This view's region of the cell bits (the finest walk's size): the rays
+  // index it by their record, and it outlives the frame for the next one's.
+  const VkDeviceSize bits_base = align_up(bits_used_, cell_bits_align());
+  const VkDeviceSize bits_bytes = std::max<size_t>(lod.draw.size(), 1) * cell_bits_bytes(pool_->cells());
+  gpu::write_storage_buffer(ctx_, set, 13, cell_bits_.buffer, bits_bytes, bits_base);
+  gpu::write_uniform_buffer(ctx_, set, 14, cell_bits_.buffer, cell_bits_window_bytes(bits_base), bits_base);
   // E-A and emission walk the pool's cells or 2x2x2 groups of them,
   // whichever is cheaper by a rough count: the cells let a ray skip the
   // samples of the empty cells in groups it would march (cell size / step
@@ -1060,6 +1087,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     for (const ChunkKey& key : lod.draw) classify.records.emplace_back(key, pool_->slot_of(key));
     std::copy(std::begin(params.window), std::end(params.window), classify.window.begin());
     classify.table = tf.rgba;
+    classify.bits_offset = bits_base;
+    classify.bits_bytes = bits_bytes;
     const double skipped = double(split) * pool_->cells().cell_size / s.step_voxels;
     walk = pool_->cells().cell_size < 4 && skipped > double(groups) ? CellWalk::kCells : CellWalk::kGroups;
     if (opt_.cell_walk != BrickCellWalk::kAuto)
@@ -1070,6 +1099,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   ++views_;
   table_used_ = table_base + table_bytes;
   items_used_ = items_base + items_bytes;
+  bits_used_ = bits_base + bits_bytes;
 
   // Missing bricks: streaming asks the loader threads (nearest first, this
   // frame before older ones); otherwise render() reads them after the frame.

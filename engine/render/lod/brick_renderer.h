@@ -243,7 +243,9 @@ class BrickRenderer final : public VolumeRenderer {
   // start); written into every descriptor set.
   Status ensure_cell_keys();
   // Bytes of the bits binding 14 sees (the shader's declared size, the device's range, the buffer).
-  uint64_t cell_bits_window_bytes() const;
+  // The uniform window over the cell bits from `offset` (a view's region): 64 KiB or what the device allows.
+  uint64_t cell_bits_window_bytes(uint64_t offset) const;
+  uint64_t cell_bits_align() const;  // of a view's region: both its descriptors' offset alignments
   // Rebuilds the pool with `apron` (waits for the device; rebinds every set).
   Status rebuild_pool(uint32_t apron);
   // The frame's timepoint: its top level pinned (begin_frame, before any copy is recorded).
@@ -276,19 +278,30 @@ class BrickRenderer final : public VolumeRenderer {
   // groups of 2x2x2 of them where the pool's are smaller than 4 voxels
   // (MIP / MinIP always walk those; E-A and emission as record_view decides).
   enum class CellWalk { kOff, kCells, kGroups };
-  // What a classify pass's cell bits (E-A, emission: per brick record) or
-  // keys (MIP / MinIP: per slot) depend on. The buffers keep the last pass's
-  // results, so a view whose inputs equal them (a still camera, an idle
-  // `vxr view`, a benchmark's repeated frames) skips the pass.
+  // What a view's classify pass wrote and from what: cell bits (E-A,
+  // emission: per brick record, in the view's region of the bits buffer) or
+  // keys (MIP / MinIP: per slot, shared by the views). The buffers keep each
+  // view's last results, so a view whose inputs equal them (a still camera
+  // or head, an idle `vxr view`, a benchmark's repeated frames) skips the pass.
   struct CellClassInputs {
     std::vector<std::pair<ChunkKey, uint32_t>> records;  // per brick record: its key and slot (the ranges read)
     std::array<glm::vec4, VXR_MAX_CHANNELS> window{};   // RaycastParams::window
     std::vector<glm::vec4> table;                         // the transfer table
     uint32_t model = 0, walked_cells = 0, range_cells = 0;
+    uint64_t bits_offset = 0, bits_bytes = 0;  // the view's region of cell_bits_
     bool operator==(const CellClassInputs&) const = default;
+    bool writes_keys() const { return model == VXR_MODEL_MIP || model == VXR_MODEL_MINIP; }
+    // Keys written under these settings equal those of `o` for any slot both read.
+    bool same_keys(const CellClassInputs& o) const {
+      return window == o.window && table == o.table && model == o.model && walked_cells == o.walked_cells &&
+             range_cells == o.range_cells;
+    }
   };
+  // Forgets what this view's pass overwrites for the other views: their bits
+  // where the regions meet, or their keys where the settings differ.
+  void forget_overwritten(uint32_t view, const CellClassInputs& written);
   // `model`: the packed parameters' VXR_MODEL_* (control.x). `classify`: the
-  // view's records, window and table (null: no cells walked).
+  // view's records, window, table and bits region (null: no cells walked).
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
                      const std::vector<glm::uvec2>& waves, const RenderTarget& target, CellWalk cells,
@@ -319,12 +332,12 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
-  std::optional<CellClassInputs> classified_;  // what cell_keys_ / cell_bits_ hold (none: nothing known)
+  std::vector<std::optional<CellClassInputs>> classified_;  // per view of a frame: what its pass left (none: unknown)
   gpu::Handle<VkQueryPool> timestamps_;  // render(): two per frame; null without timestamps
   VkDeviceSize params_stride_ = 0;
   // This frame: views recorded, and the table / work-list entries they took.
   uint32_t views_ = 0;
-  size_t table_used_ = 0, items_used_ = 0;
+  size_t table_used_ = 0, items_used_ = 0, bits_used_ = 0;
   bool tf_recorded_ = false;
   std::vector<glm::vec4> tf_uploaded_;
   std::vector<ChunkKey> pending_;    // streaming: requested, not yet copied in
