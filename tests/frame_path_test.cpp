@@ -102,6 +102,19 @@ std::vector<uint8_t> read_back(gpu::Image& img) {
   return out;
 }
 
+// RGBA8 bytes of `px` (a and b side by side, as wide as both) that differ from them.
+int bytes_off_side_by_side(const std::vector<uint8_t>& px, const ImageRgba8& a, const ImageRgba8& b) {
+  const uint32_t w = a.width + b.width;
+  int diff = 0;
+  for (uint32_t y = 0; y < a.height; ++y)
+    for (uint32_t x = 0; x < w; ++x)
+      for (int c = 0; c < 4; ++c) {
+        const uint8_t want = x < a.width ? a.at(x, y)[c] : b.at(x - a.width, y)[c];
+        diff += px[(size_t(y) * w + x) * 4 + c] != want;
+      }
+  return diff;
+}
+
 }  // namespace
 
 TEST_CASE("volume renderer: a caller's RGBA8 storage image, a BGRA8 image (blit) and render() hold the same bytes") {
@@ -161,15 +174,7 @@ TEST_CASE("volume renderer: two views into halves of one image in one command bu
   l.rect = {{0, 0}, {32, 32}};
   rr.rect = {{32, 0}, {32, 32}};
   record_frame(*r, vessels(), {{left, l}, {right, rr}});
-  const std::vector<uint8_t> px = read_back(both.image);
-  int diff = 0;
-  for (uint32_t y = 0; y < 32; ++y)
-    for (uint32_t x = 0; x < 64; ++x)
-      for (int c = 0; c < 4; ++c) {
-        const uint8_t want = x < 32 ? a.at(x, y)[c] : b.at(x - 32, y)[c];
-        diff += px[(size_t(y) * 64 + x) * 4 + c] != want;
-      }
-  CHECK(diff == 0);
+  CHECK(bytes_off_side_by_side(read_back(both.image), a, b) == 0);
 }
 
 TEST_CASE("volume renderer: each view of a frame keeps its own cell classification, and one view's pass never stales another's") {
@@ -210,15 +215,7 @@ TEST_CASE("volume renderer: each view of a frame keeps its own cell classificati
         CHECK(sl.dispatches == c.repeat_dispatches);
         CHECK(sr.dispatches == c.repeat_dispatches);
       }
-      const std::vector<uint8_t> px = read_back(both.image);
-      int diff = 0;
-      for (uint32_t y = 0; y < 32; ++y)
-        for (uint32_t x = 0; x < 64; ++x)
-          for (int ch = 0; ch < 4; ++ch) {
-            const uint8_t want = x < 32 ? a.at(x, y)[ch] : b.at(x - 32, y)[ch];
-            diff += px[(size_t(y) * 64 + x) * 4 + ch] != want;
-          }
-      CHECK(diff == 0);
+      CHECK(bytes_off_side_by_side(read_back(both.image), a, b) == 0);
     }
   }
 }
