@@ -701,8 +701,11 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
     classify->range_cells = range_cells_per_axis;
     std::optional<CellClassInputs>& mine = classified_[views_];
     classified = mine && *mine == *classify;
-    if (!classified) forget_overwritten(views_, *classify);
-    mine = std::move(*classify);
+    if (!classified) {
+      forget_overwritten(views_, *classify);
+      if (!mine) mine.emplace();
+      std::swap(*mine, *classify);  // the caller's scratch keeps the old entry's storage
+    }
   }
   if (cells_per_axis > 0 && bricks > 0 && !classified) {
     // The cells of the view's bricks classified once, so a ray's cell test is a load and a compare.
@@ -1081,12 +1084,12 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   // vessels walk cells (`vxr bench peer`), a dense volume groups (`vxr bench
   // roofline`).
   CellWalk walk = CellWalk::kOff;
-  CellClassInputs classify;
+  CellClassInputs& classify = classify_scratch_;  // reused: no allocation per frame once sizes settle
   if (skip_cells) {
-    classify.records.reserve(lod.draw.size());
+    classify.records.clear();
     for (const ChunkKey& key : lod.draw) classify.records.emplace_back(key, pool_->slot_of(key));
     std::copy(std::begin(params.window), std::end(params.window), classify.window.begin());
-    classify.table = tf.rgba;
+    classify.table.assign(tf.rgba.begin(), tf.rgba.end());
     classify.bits_offset = bits_base;
     classify.bits_bytes = bits_bytes;
     const double skipped = double(split) * pool_->cells().cell_size / s.step_voxels;

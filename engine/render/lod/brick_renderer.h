@@ -100,7 +100,7 @@ struct BrickRendererOptions {
   // frame draws at full detail from the first (and deterministically).
   bool preload_if_fits = false;
   // The E-A and emission cell tests read each cell's emptiness
-  // bit through a uniform buffer while the frame's bricks fit its range (64
+  // bit through a uniform buffer while the view's bricks fit its range (64
   // KiB: 128 bricks of 64^3 in 4-voxel cells, 16 in 2-voxel ones), else
   // through a storage buffer. False: always the storage buffer (tests pin
   // that both agree).
@@ -242,7 +242,6 @@ class BrickRenderer final : public VolumeRenderer {
   // (brick_raycast.comp binding 11) and emptiness bits (13, and 14 over its
   // start); written into every descriptor set.
   Status ensure_cell_keys();
-  // Bytes of the bits binding 14 sees (the shader's declared size, the device's range, the buffer).
   // The uniform window over the cell bits from `offset` (a view's region): 64 KiB or what the device allows.
   uint64_t cell_bits_window_bytes(uint64_t offset) const;
   uint64_t cell_bits_align() const;  // of a view's region: both its descriptors' offset alignments
@@ -301,7 +300,8 @@ class BrickRenderer final : public VolumeRenderer {
   // where the regions meet, or their keys where the settings differ.
   void forget_overwritten(uint32_t view, const CellClassInputs& written);
   // `model`: the packed parameters' VXR_MODEL_* (control.x). `classify`: the
-  // view's records, window, table and bits region (null: no cells walked).
+  // view's records, window, table and bits region (null: no cells walked);
+  // when they are new, they are swapped into the view's entry of classified_.
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
                      const std::vector<glm::uvec2>& waves, const RenderTarget& target, CellWalk cells,
@@ -333,6 +333,7 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
   std::vector<std::optional<CellClassInputs>> classified_;  // per view of a frame: what its pass left (none: unknown)
+  CellClassInputs classify_scratch_;  // record_view fills it each view; swapped with classified_'s entry when new
   gpu::Handle<VkQueryPool> timestamps_;  // render(): two per frame; null without timestamps
   VkDeviceSize params_stride_ = 0;
   // This frame: views recorded, and the table / work-list entries they took.
