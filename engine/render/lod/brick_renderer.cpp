@@ -1080,7 +1080,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   // whichever is cheaper by a rough count: the cells let a ray skip the
   // samples of the empty cells in groups it would march (cell size / step
   // each), the groups take one walk step per group crossed instead of about
-  // two, and a walk step costs about a sample. The MRI and the sparse
+  // two, weighed alike (the DDA walk costs about a third of a sample a cell;
+  // the weights date from the walk before it). The MRI and the sparse
   // vessels walk cells (`vxr bench peer`), a dense volume groups (`vxr bench
   // roofline`).
   CellWalk walk = CellWalk::kOff;
