@@ -69,6 +69,9 @@ layout(push_constant) uniform Push { BrickCastParams p; };
 // the walks and the grouped runs compile away and a frame with skipping off
 // marches as if they did not exist. The default (unspecialised) is the general path.
 layout(constant_id = 106) const bool VXR_SC_CELLS = true;
+// VXR_SAMPLE_*: anything but SHADE is a benchmark's probe (shared/brick_params.h);
+// its pixels show what the probe summed, not an image.
+layout(constant_id = 107) const uint VXR_SC_SAMPLE_WORK = VXR_SAMPLE_SHADE;
 
 // The ray's unit direction in level-0 voxels: samples are taken in the brick's
 // local voxels, depth colour is measured along the whole ray from P.eye.
@@ -81,6 +84,8 @@ vec3 g_dir;
 vec3 g_atlas_origin;
 // Where the ray ends (t units): the underlay's depth, +inf without one.
 float g_t_limit = 1.0 / 0.0;
+// A probe's sum (VXR_SC_SAMPLE_WORK): stored as the pixel, so its work is kept.
+float g_probe = 0.0;
 
 vec4 vxr_sample(vec3 pos) {
   const vec3 uvw = (g_atlas_origin + pos) * p.atlas_inv.xyz;
@@ -415,7 +420,11 @@ void main() {
   if (item_mode && !segment(first, dir, t0, t1)) return;
 
   VxrRay ray = vxr_begin(P, dir);
-  if ((flags & VXR_BRICK_LOAD_ACCUM) != 0u) ray = unpack_ray(imageLoad(accum_image, ivec2(pix)));
+  if ((flags & VXR_BRICK_LOAD_ACCUM) != 0u) {
+    const vec4 state = imageLoad(accum_image, ivec2(pix));
+    if (VXR_SC_SAMPLE_WORK == VXR_SAMPLE_SHADE) ray = unpack_ray(state);
+    else g_probe = state.x;
+  }
   if (item_mode && ray.done) return;  // terminated earlier: nothing to add
   uint taken = 0u;
 
@@ -501,7 +510,8 @@ void main() {
         if (!(k < n && !ray.done)) continue;
         // From the index: no drift. The segment is dt level-0 voxels long.
         const float t = (i0 + float(k) + offset) * dt;
-        vxr_step(ray, P, e, dl, t, dt);
+        if (VXR_SC_SAMPLE_WORK == VXR_SAMPLE_SHADE) vxr_step(ray, P, e, dl, t, dt);
+        else g_probe += VXR_SC_SAMPLE_WORK == VXR_SAMPLE_FETCH_ONLY ? vxr_sample(e + t * dl).x : t;
         ++taken;
         // The crossing's normal needs its brick's voxels: shade it now.
         if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
@@ -515,9 +525,10 @@ void main() {
     const uint old = atomicAdd(samples_lo, total);
     if (old + total < old) atomicAdd(samples_hi, 1u);
   }
-  if ((flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), pack_ray(ray));
+  const bool probe = VXR_SC_SAMPLE_WORK != VXR_SAMPLE_SHADE;
+  if ((flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), probe ? vec4(g_probe) : pack_ray(ray));
   if ((flags & VXR_BRICK_STORE_FINAL) != 0u) {
-    vec4 c = finish_ray(ray);
+    vec4 c = probe ? vec4(fract(g_probe)) : finish_ray(ray);
     // The underlay under the volume (premultiplied): composite_volume_over's rule.
     if (underlay) c += (1.0 - clamp(c.a, 0.0, 1.0)) * imageLoad(under_color, full_pix);
     if ((flags & VXR_BRICK_OPAQUE) != 0u) c.a = 1.0;  // premultiplied over black

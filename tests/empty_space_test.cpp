@@ -535,3 +535,37 @@ TEST_CASE("empty-space cells: the CPU cell test keeps every cell that can reach 
   s.model = OpticalModel::kAverage;
   CHECK(CellOpacity(s, build_transfer_table(s), u8).may_contribute(0, {texel(201), texel(255)}));
 }
+
+TEST_CASE("bench probes: fetch-only and march-only frames take the shaded frame's samples, in both pass modes") {
+  // `vxr bench roofline` splits a frame's time with them; the split is only
+  // meaningful if the probes march the frame's rays, bricks and walks.
+  test::GpuTestScope scope;
+  auto src = sparse_vessels(128);
+  auto made = small_pool_renderer(*src);
+  BrickRenderer& r = *made;
+  const Camera cam = orbit_camera(r.placement(), 30, 25, 1.25);
+  RenderSettings s = vessel_settings(OpticalModel::kEmissionAbsorption);
+  s.early_termination = 0.0;  // probe rays never terminate; here the shaded ones do not either
+  for (BrickPassMode mode : {BrickPassMode::kMultipass, BrickPassMode::kTiled}) {
+    BrickFrameSettings f;
+    f.lod.force_level = 0;
+    f.mode = mode;
+    BrickFrameStats shaded, fetched, marched;
+    const ImageRgba8 a = converge(r, cam, s, f, 96, 96, &shaded);
+    f.sample_work = SampleWork::kFetchOnly;
+    const ImageRgba8 b = converge(r, cam, s, f, 96, 96, &fetched);
+    f.sample_work = SampleWork::kMarchOnly;
+    const ImageRgba8 c = converge(r, cam, s, f, 96, 96, &marched);
+    const std::string what = std::string(mode == BrickPassMode::kTiled ? "tiled" : "multipass") + ": samples " +
+                             std::to_string(shaded.samples) + ", fetch only " + std::to_string(fetched.samples) +
+                             ", march only " + std::to_string(marched.samples);
+    INFO(what);
+    CHECK(test::looks_non_blank(a));
+    CHECK(shaded.samples > 0);
+    CHECK(fetched.samples == shaded.samples);
+    CHECK(marched.samples == shaded.samples);
+    // The probes draw what they summed: the fetched values, the sample positions.
+    CHECK(b.pixels != a.pixels);
+    CHECK(c.pixels != b.pixels);
+  }
+}

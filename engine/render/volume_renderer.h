@@ -31,6 +31,7 @@
 namespace vxr {
 
 enum class BrickPassMode { kAuto, kSinglePass, kTiled, kMultipass };
+enum class SampleWork { kShade, kFetchOnly, kMarchOnly };  // VXR_SAMPLE_* (shared/brick_params.h)
 
 struct BrickFrameSettings {
   LodSettings lod;
@@ -39,6 +40,9 @@ struct BrickFrameSettings {
   // With lod.skip_empty, rays also jump the empty cells inside drawn bricks
   // (BrickCells; same image). Off: brick-level skipping only (measurements).
   bool skip_cells = true;
+  // What each sample does: the optical model, or (`vxr bench roofline`'s
+  // split of a frame's time) the fetch alone or neither; probes draw no image.
+  SampleWork sample_work = SampleWork::kShade;
 };
 
 // The settings' clipping (volume fractions, scene/render_settings.h) as the

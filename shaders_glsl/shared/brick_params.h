@@ -33,6 +33,13 @@ using uvec4 = glm::uvec4;
 // Binding 14's declared size: 4096 uvec4, 64 KiB.
 #define VXR_CELL_BITS_WINDOW_WORDS 16384u
 
+// What each sample does (specialisation constant 107, VXR_SC_SAMPLE_WORK):
+// the optical model, or for `vxr bench roofline`'s split of a frame's time
+// the texture fetch alone or neither (the rays, bricks and walks stay the frame's).
+#define VXR_SAMPLE_SHADE 0u
+#define VXR_SAMPLE_FETCH_ONLY 1u
+#define VXR_SAMPLE_MARCH_ONLY 2u
+
 // One brick to march, everything in its own local voxels (level-l voxels,
 // origin at the brick's interior corner): the CPU computes these in double,
 // so the GPU never sees a large coordinate.

@@ -66,14 +66,16 @@ Result<std::vector<Scene>> scenes() {
   return out;
 }
 
-// Converges (every brick resident), then the median GPU time of `repeats` frames.
-Result<TimedFrames> measure(gpu::Context& ctx, const Scene& sc, int repeats) {
+// Converges (every brick resident), then the median GPU time of `repeats`
+// frames whose samples do `work` (a probe: the fetch alone or nothing).
+Result<TimedFrames> measure(gpu::Context& ctx, const Scene& sc, int repeats, SampleWork work) {
   BrickRendererOptions ro;
   ro.preload_if_fits = true;
   VXR_ASSIGN_OR_RETURN(auto r, BrickRenderer::create(ctx, *sc.source, ro));
   const Camera cam = orbit_camera(r->placement(), 30.0, 25.0, 1.25);
   BrickFrameSettings f;
   f.lod.force_level = 0;
+  f.sample_work = work;
   VXR_ASSIGN_OR_RETURN(TimedFrames t, time_converged(*r, cam, sc.settings, f, kSize, repeats));
   if (t.gpu_ms <= 0.0) return unsupported("bench roofline: the device has no timestamps");
   return t;
@@ -100,19 +102,44 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
                    roof->copy_gb_per_s, roof->transfer_gb_per_s, roof->trilinear_samples_per_s / 1e6);
       nlohmann::json rows = nlohmann::json::array();
       for (const Scene& sc : *made) {
-        auto m = measure(ctx, sc, opt->repeats);
+        auto m = measure(ctx, sc, opt->repeats, SampleWork::kShade);
         if (!m) return cli::fail(m.status());
         const double rate = m->stats.samples / (m->gpu_ms * 1e-3);
         const double ratio = rate / roof->trilinear_samples_per_s;
-        rows.push_back({{"scene", sc.name},
-                        {"step_voxels", sc.settings.step_voxels},
-                        {"gpu_ms", m->gpu_ms},
-                        {"wall_ms", m->wall_ms},
-                        {"samples", m->stats.samples},
-                        {"samples_per_s", rate},
-                        {"roofline_ratio", ratio}});
+        nlohmann::json row = {{"scene", sc.name},
+                              {"step_voxels", sc.settings.step_voxels},
+                              {"gpu_ms", m->gpu_ms},
+                              {"wall_ms", m->wall_ms},
+                              {"samples", m->stats.samples},
+                              {"samples_per_s", rate},
+                              {"roofline_ratio", ratio}};
         std::fprintf(stderr, "roofline: %-18s %8.2f gpu ms %8.2f wall ms %6.1f M samples %6.0f M/s  %.2f of ceiling\n",
                      sc.name.c_str(), m->gpu_ms, m->wall_ms, m->stats.samples / 1e6, rate / 1e6, ratio);
+        if (sc.settings.model == OpticalModel::kEmissionAbsorption) {
+          // Where the frame's time goes: the same rays, bricks and walks with
+          // each sample only fetched, then not even that. Probe rays never
+          // terminate, so rates (samples per second) are compared, not times.
+          auto fetch = measure(ctx, sc, opt->repeats, SampleWork::kFetchOnly);
+          if (!fetch) return cli::fail(fetch.status());
+          auto march = measure(ctx, sc, opt->repeats, SampleWork::kMarchOnly);
+          if (!march) return cli::fail(march.status());
+          const double fetch_rate = fetch->stats.samples / (fetch->gpu_ms * 1e-3);
+          // Per million samples: the march alone, the fetch on top of it, the shading on top of both.
+          const double us_march = march->gpu_ms * 1e3 / (march->stats.samples / 1e6);
+          const double us_fetch = fetch->gpu_ms * 1e3 / (fetch->stats.samples / 1e6) - us_march;
+          const double us_shade = m->gpu_ms * 1e3 / (m->stats.samples / 1e6) - us_march - us_fetch;
+          row["fetch_only"] = {{"gpu_ms", fetch->gpu_ms}, {"samples", fetch->stats.samples},
+                               {"samples_per_s", fetch_rate}};
+          row["march_only"] = {{"gpu_ms", march->gpu_ms}, {"samples", march->stats.samples}};
+          row["ms_per_m_samples"] = {{"march", us_march / 1e3}, {"fetch", us_fetch / 1e3}, {"shade", us_shade / 1e3}};
+          row["share_of_fetch_rate"] = rate / fetch_rate;
+          std::fprintf(stderr,
+                       "roofline: %-18s fetch only %6.0f M/s (%.2f of ceiling), frame %.2f of it; per M samples: "
+                       "march %.2f ms, fetch %.2f, shade %.2f\n",
+                       "", fetch_rate / 1e6, fetch_rate / roof->trilinear_samples_per_s, rate / fetch_rate,
+                       us_march / 1e3, us_fetch / 1e3, us_shade / 1e3);
+        }
+        rows.push_back(std::move(row));
       }
       nlohmann::json doc = {
           {"ceilings",

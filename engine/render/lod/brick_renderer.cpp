@@ -454,20 +454,26 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
   return Status::ok();
 }
 
-Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model, bool cells) {
-  // Specialisation constants: raycast_core.glsl ids 100..105, brick_raycast.comp 106.
+Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
+                                                                SampleWork work) {
+  // Specialisation constants: raycast_core.glsl ids 100..105, brick_raycast.comp 106, 107.
   const uint32_t n = channels();
   const bool gradient = s.gradient_opacity.enabled, depth = s.depth_color != DepthColorMode::kOff;
   bool gamma = false;
   for (uint32_t c = 0; c < n && c < s.channels.size(); ++c) gamma = gamma || s.channels[c].gamma != 1.0;
   const bool naive = !s.opacity_correction;
-  return variant(model, n, gradient, depth, gamma, naive, cells);
+  return variant(model, n, gradient, depth, gamma, naive, cells, work);
 }
 
+static_assert(uint32_t(SampleWork::kShade) == VXR_SAMPLE_SHADE && uint32_t(SampleWork::kFetchOnly) == VXR_SAMPLE_FETCH_ONLY &&
+                  uint32_t(SampleWork::kMarchOnly) == VXR_SAMPLE_MARCH_ONLY,
+              "SampleWork is spec constant 107's value");
+
 Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint32_t n, bool gradient, bool depth,
-                                                           bool gamma, bool naive, bool cells) {
+                                                           bool gamma, bool naive, bool cells, SampleWork work) {
   const uint32_t key = model | (n << 4) | (gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u) |
-                       (gamma ? 1u << 10 : 0u) | (naive ? 1u << 11 : 0u) | (cells ? 1u << 12 : 0u);
+                       (gamma ? 1u << 10 : 0u) | (naive ? 1u << 11 : 0u) | (cells ? 1u << 12 : 0u) |
+                       (uint32_t(work) << 13);
   std::map<uint32_t, gpu::ComputePipeline>& variants = pipes_->variants;
   if (auto it = variants.find(key); it != variants.end()) return &it->second;
   VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p,
@@ -478,7 +484,8 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint3
                                                             {103, depth ? 1u : 0u},
                                                             {104, gamma ? 1u : 0u},
                                                             {105, naive ? 1u : 0u},
-                                                            {106, cells ? 1u : 0u}}}));
+                                                            {106, cells ? 1u : 0u},
+                                                            {107, uint32_t(work)}}}));
   return &variants.emplace(key, std::move(p)).first->second;
 }
 
@@ -636,7 +643,8 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
 Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
                                   uint32_t w, uint32_t h, uint32_t bricks, const glm::uvec3& atlas_texels,
                                   BrickPassMode mode, const std::vector<glm::uvec2>& waves, const RenderTarget& target,
-                                  CellWalk cell_walk, CellClassInputs* classify, uint32_t* dispatches_out) {
+                                  CellWalk cell_walk, SampleWork work, CellClassInputs* classify,
+                                  uint32_t* dispatches_out) {
   // RGBA8 UNORM with a storage view: the rays write it. Anything else (BGRA,
   // sRGB, float, no storage usage): final float pixels go to the
   // accumulation image and one blit converts them into the target's format.
@@ -669,7 +677,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                                     (reduce && walk.cell_size >= 2.0 * s.step_voxels));
   const uint32_t cells_per_axis = cells ? walk.cells_per_axis : 0u;
   const uint32_t range_cells_per_axis = pool_->cells().cells_per_axis;
-  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model, cells));
+  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model, cells, work));
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(walk.cell_size));
   if (target.warp_x.active() || target.warp_y.active())
@@ -1099,7 +1107,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
       walk = opt_.cell_walk == BrickCellWalk::kCells ? CellWalk::kCells : CellWalk::kGroups;
   }
   VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),
-                                  pool_->atlas_texels(), mode, waves, target, walk, &classify, &st.dispatches));
+                                  pool_->atlas_texels(), mode, waves, target, walk, frame.sample_work, &classify,
+                                  &st.dispatches));
   ++views_;
   table_used_ = table_base + table_bytes;
   items_used_ = items_base + items_bytes;
@@ -1312,7 +1321,8 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
     gpu::write_storage_image(ctx_, mono_set_, 2, target_.view);
     gpu::write_storage_image(ctx_, mono_set_, 3, accum_.view);
     recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
-                           BrickPassMode::kSinglePass, {}, target, CellWalk::kOff, nullptr, &st.dispatches);
+                           BrickPassMode::kSinglePass, {}, target, CellWalk::kOff, SampleWork::kShade, nullptr,
+                           &st.dispatches);
   }));
   VXR_RETURN_IF_ERROR(recorded);
   st.render_ms = ms_since(t0);

@@ -255,10 +255,11 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<const gpu::Image*> pool_atlases() const;
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
   // features) and for whether its dispatches use empty-space cells.
-  Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, bool cells);
+  Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
+                                                   SampleWork work);
   // The variant for these specialisation constants, built on first use.
   Result<const gpu::ComputePipeline*> variant(uint32_t model, uint32_t channels, bool gradient, bool depth, bool gamma,
-                                              bool naive, bool cells);
+                                              bool naive, bool cells, SampleWork work = SampleWork::kShade);
   // The part of brick `key` its rays march, in its local voxels: the brick
   // clipped to the ROI and, with `cells` (cell skipping on), to the box of
   // its cells that `cells` says may change a ray. Empty
@@ -305,7 +306,7 @@ class BrickRenderer final : public VolumeRenderer {
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
                      const std::vector<glm::uvec2>& waves, const RenderTarget& target, CellWalk cells,
-                     CellClassInputs* classify, uint32_t* dispatches);
+                     SampleWork work, CellClassInputs* classify, uint32_t* dispatches);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
   // `dst` (capacity entries); returns (first item, count) per wave.
   // `ax`, `ay`: the ray grid (identity_warp, or the lens warp's).
