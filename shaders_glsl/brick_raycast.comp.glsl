@@ -54,13 +54,14 @@ layout(binding = 10, rgba8) uniform readonly image2D under_color;
 // and emission: per brick record, one bit per cell (set: empty), cell_words() words.
 layout(std430, binding = 11) buffer CellKeys { float cell_keys[]; };
 layout(std430, binding = 13) buffer CellBits { uint cell_bits[]; };
-// Rows 0..3 of binding 1 again (the colour and opacity entries): a uniform
-// buffer, which lavapipe (Mesa 22) reads at per-ray offsets with straight-line
-// loads, where a storage buffer load loops over the rays with a branch each
-// (same floats).
-layout(std140, binding = 12) uniform TransferRows { vec4 transfer_rows[VXR_MAX_CHANNELS * VXR_TF_SIZE]; };
-// The start of binding 13 again, as a uniform buffer (VXR_BRICK_CELL_BITS_UNIFORM), for the same reason:
-// the MRI's E-A frame at step 0.5 took 172 -> 158 ms (`vxr bench peer`).
+// Rows 0..3 of binding 1 again (the colour and opacity entries) as RGBA32F
+// texels, which lavapipe (Mesa 22) loads whole per ray; a uniform buffer at
+// per-ray offsets loads component by component, a storage buffer ray by
+// ray with a branch each (same floats).
+layout(binding = 12) uniform samplerBuffer transfer_rows;
+// The start of binding 13 again, as a uniform buffer (VXR_BRICK_CELL_BITS_UNIFORM): lavapipe
+// loads a uint at per-ray offsets there without a branch per ray (a storage buffer has
+// one): the MRI's E-A frame at step 0.5 took 172 -> 158 ms (`vxr bench peer`).
 layout(std140, binding = 14) uniform CellBitsWindow { uvec4 cell_bits_window[VXR_CELL_BITS_WINDOW_WORDS / 4u]; };
 
 layout(push_constant) uniform Push { BrickCastParams p; };
@@ -103,7 +104,7 @@ vec4 vxr_transfer(int channel, float x) {
   float f;
   vxr_transfer_index(x, i, f);
   const int row = channel * VXR_TF_SIZE + i;
-  return mix(transfer_rows[row], transfer_rows[row + 1], f);
+  return mix(texelFetch(transfer_rows, row), texelFetch(transfer_rows, row + 1), f);
 }
 
 // A ray's state between passes in one RGBA32F texel. The CPU sends only

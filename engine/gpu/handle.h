@@ -20,6 +20,7 @@ struct Destroyer;
   }
 
 VXR_GPU_DESTROYER(VkBuffer, vkDestroyBuffer);
+VXR_GPU_DESTROYER(VkBufferView, vkDestroyBufferView);
 VXR_GPU_DESTROYER(VkImage, vkDestroyImage);
 VXR_GPU_DESTROYER(VkImageView, vkDestroyImageView);
 VXR_GPU_DESTROYER(VkSampler, vkDestroySampler);

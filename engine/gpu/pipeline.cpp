@@ -211,5 +211,14 @@ void write_uniform_buffer(const Context& ctx, VkDescriptorSet set, uint32_t bind
                           VkDeviceSize size, VkDeviceSize offset) {
   write_buffer(ctx, set, binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, buffer, size, offset);
 }
+void write_uniform_texel_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBufferView view) {
+  VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  w.dstSet = set;
+  w.dstBinding = binding;
+  w.descriptorCount = 1;
+  w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+  w.pTexelBufferView = &view;
+  vkUpdateDescriptorSets(ctx.device(), 1, &w, 0, nullptr);
+}
 
 }  // namespace vxr::gpu

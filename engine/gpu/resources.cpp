@@ -275,4 +275,16 @@ Result<Handle<VkSampler>> create_nearest_clamp_sampler(const Context& ctx) {
   return make_sampler(ctx, VK_FILTER_NEAREST);
 }
 
+Result<Handle<VkBufferView>> create_buffer_view(const Context& ctx, VkBuffer buffer, VkFormat format,
+                                                VkDeviceSize offset, VkDeviceSize range) {
+  VkBufferViewCreateInfo ci{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+  ci.buffer = buffer;
+  ci.format = format;
+  ci.offset = offset;
+  ci.range = range;
+  VkBufferView v = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateBufferView(ctx.device(), &ci, nullptr, &v));
+  return Handle<VkBufferView>(ctx.device(), v);
+}
+
 }  // namespace vxr::gpu

@@ -103,4 +103,8 @@ uint64_t readback_count();
 Result<Handle<VkSampler>> create_linear_clamp_sampler(const Context& ctx);
 Result<Handle<VkSampler>> create_nearest_clamp_sampler(const Context& ctx);
 
+// A texel view of `range` bytes of `buffer` from `offset` (the buffer needs a texel-buffer usage).
+Result<Handle<VkBufferView>> create_buffer_view(const Context& ctx, VkBuffer buffer, VkFormat format,
+                                                VkDeviceSize offset, VkDeviceSize range);
+
 }  // namespace vxr::gpu

@@ -29,7 +29,7 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {9, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},   // underlay depth
       {10, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // underlay colour
       {11, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell keys
-      {12, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // transfer rows
+      {12, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // transfer rows
       {13, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits
       {14, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits' window
   };
@@ -260,16 +260,20 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
     r->view_sets_.push_back(set);
   }
   VXR_ASSIGN_OR_RETURN(r->linear_, gpu::create_linear_clamp_sampler(ctx));
-  // A buffer, not a texture: on lavapipe a texelFetch runs the sampler's
-  // code. The colour rows are also bound as a uniform buffer (16 KiB, the
-  // range every device allows): lavapipe reads a uniform buffer at per-ray
-  // offsets with straight-line loads, a storage buffer ray by ray with a
-  // branch each (E-A with skipping off about 8% faster).
+  // A buffer, not a texture: on lavapipe a texelFetch from an image runs the
+  // sampler's code. The rays read the colour and opacity rows through a
+  // texel view (binding 12): lavapipe loads a ray's texel whole, where a
+  // storage buffer loads ray by ray with a branch each and a uniform buffer
+  // at per-ray offsets component by component (MRI E-A 3-4% faster than
+  // the uniform buffer; docs/skipping-perf.md, fifth round).
   const uint64_t tf_bytes = uint64_t(VXR_TF_SIZE) * 2 * VXR_MAX_CHANNELS * sizeof(glm::vec4);
   VXR_ASSIGN_OR_RETURN(r->transfer_buf_,
-                       gpu::create_buffer(ctx, {tf_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT |
+                       gpu::create_buffer(ctx, {tf_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                                              VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT |
                                                               VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                                 gpu::MemoryIntent::kDeviceLocal, "transfer function"}));
+  VXR_ASSIGN_OR_RETURN(r->transfer_rows_, gpu::create_buffer_view(ctx, r->transfer_buf_.buffer,
+                                                                   VK_FORMAT_R32G32B32A32_SFLOAT, 0, tf_bytes / 2));
   VXR_ASSIGN_OR_RETURN(r->tf_staging_, gpu::create_buffer(ctx, {tf_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                                                 gpu::MemoryIntent::kUpload, "transfer function staging"}));
   VXR_ASSIGN_OR_RETURN(r->table_, gpu::create_buffer(ctx, {uint64_t(options.max_bricks) * sizeof(shader::BrickRecord),
@@ -314,7 +318,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
     gpu::write_storage_buffer(ctx, set, 8, r->pool_->cell_ranges().buffer);
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
     gpu::write_storage_buffer(ctx, set, 1, r->transfer_buf_.buffer);
-    gpu::write_uniform_buffer(ctx, set, 12, r->transfer_buf_.buffer, tf_bytes / 2);
+    gpu::write_uniform_texel_buffer(ctx, set, 12, r->transfer_rows_.get());
   }
   gpu::write_storage_buffer(ctx, r->mono_set_, 4, r->table_.buffer);
   gpu::write_storage_buffer(ctx, r->mono_set_, 6, r->items_.buffer);

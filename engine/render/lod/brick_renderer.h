@@ -328,6 +328,7 @@ class BrickRenderer final : public VolumeRenderer {
   VkDescriptorSet mono_set_ = VK_NULL_HANDLE;
   std::vector<VkDescriptorSet> view_sets_;  // one per view of a frame
   gpu::Handle<VkSampler> linear_;
+  gpu::Handle<VkBufferView> transfer_rows_;  // transfer_buf_'s colour and opacity rows as RGBA32F texels
   gpu::Image target_, float_target_, accum_;
   gpu::Image no_under_depth_, no_under_color_;  // 1x1, bound where a view has no underlay
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
