@@ -172,28 +172,31 @@ Result<VkDescriptorSet> allocate_descriptor_set(const Context& ctx, VkDescriptor
   return set;
 }
 
-static void write_image(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkDescriptorType type,
-                        VkImageView view, VkSampler sampler, VkImageLayout layout) {
-  VkDescriptorImageInfo ii{sampler, view, layout};
+// One descriptor of `type`: exactly one of image, buffer and texels is set.
+static void write_descriptor(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkDescriptorType type,
+                             const VkDescriptorImageInfo* image, const VkDescriptorBufferInfo* buffer,
+                             const VkBufferView* texels) {
   VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
   w.dstSet = set;
   w.dstBinding = binding;
   w.descriptorCount = 1;
   w.descriptorType = type;
-  w.pImageInfo = &ii;
+  w.pImageInfo = image;
+  w.pBufferInfo = buffer;
+  w.pTexelBufferView = texels;
   vkUpdateDescriptorSets(ctx.device(), 1, &w, 0, nullptr);
+}
+
+static void write_image(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkDescriptorType type,
+                        VkImageView view, VkSampler sampler, VkImageLayout layout) {
+  const VkDescriptorImageInfo ii{sampler, view, layout};
+  write_descriptor(ctx, set, binding, type, &ii, nullptr, nullptr);
 }
 
 static void write_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkDescriptorType type,
                          VkBuffer buffer, VkDeviceSize size, VkDeviceSize offset) {
-  VkDescriptorBufferInfo bi{buffer, offset, size};
-  VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-  w.dstSet = set;
-  w.dstBinding = binding;
-  w.descriptorCount = 1;
-  w.descriptorType = type;
-  w.pBufferInfo = &bi;
-  vkUpdateDescriptorSets(ctx.device(), 1, &w, 0, nullptr);
+  const VkDescriptorBufferInfo bi{buffer, offset, size};
+  write_descriptor(ctx, set, binding, type, nullptr, &bi, nullptr);
 }
 
 void write_combined_image(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkImageView view,
@@ -212,13 +215,7 @@ void write_uniform_buffer(const Context& ctx, VkDescriptorSet set, uint32_t bind
   write_buffer(ctx, set, binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, buffer, size, offset);
 }
 void write_uniform_texel_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBufferView view) {
-  VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-  w.dstSet = set;
-  w.dstBinding = binding;
-  w.descriptorCount = 1;
-  w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-  w.pTexelBufferView = &view;
-  vkUpdateDescriptorSets(ctx.device(), 1, &w, 0, nullptr);
+  write_descriptor(ctx, set, binding, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, nullptr, nullptr, &view);
 }
 
 }  // namespace vxr::gpu
