@@ -34,8 +34,10 @@ using uvec4 = glm::uvec4;
 #define VXR_CELL_BITS_WINDOW_WORDS 16384u
 
 // What each sample does (specialisation constant 107, VXR_SC_SAMPLE_WORK):
-// the optical model, or for `vxr bench roofline`'s split of a frame's time
-// the texture fetch alone or neither (the rays, bricks and walks stay the frame's).
+// the optical model, or for `vxr bench roofline`'s split of an E-A frame's
+// time the texture fetch alone or neither. The rays, bricks and walks stay
+// the frame's, except that probe rays never terminate (and MIP / MinIP cell
+// tests, which read the running value, would walk differently).
 #define VXR_SAMPLE_SHADE 0u
 #define VXR_SAMPLE_FETCH_ONLY 1u
 #define VXR_SAMPLE_MARCH_ONLY 2u
