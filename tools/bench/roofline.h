@@ -4,6 +4,8 @@
 // machines.
 #pragma once
 
+#include <memory>
+
 #include "core/status.h"
 #include "gpu/context.h"
 
@@ -20,5 +22,24 @@ struct Roofline {
 
 // Takes about a second on lavapipe; `repeats` timed runs each, median kept.
 Result<Roofline> measure_roofline(gpu::Context& ctx, int repeats);
+
+// The trilinear-sampling kernel, set up once and timed on demand, so a
+// benchmark can time it in turn with its own frames: on a shared machine a
+// ratio of two measurements taken in turn drifts far less than one of
+// measurements taken a minute apart.
+class SamplingCeiling {
+ public:
+  static Result<std::unique_ptr<SamplingCeiling>> create(gpu::Context& ctx);
+  ~SamplingCeiling();
+  // Wall ms of one dispatch of samples() trilinear fetches (submitted and waited for).
+  Result<double> time_ms();
+  static double samples();
+
+ private:
+  struct Resources;
+  explicit SamplingCeiling(gpu::Context& ctx);
+  gpu::Context& ctx_;
+  std::unique_ptr<Resources> res_;
+};
 
 }  // namespace vxr::bench
