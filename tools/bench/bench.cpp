@@ -24,6 +24,10 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
 double median_ms(int repeats, const std::function<Status()>& fn, Status* error) {
   if (Status s = fn(); !s.is_ok()) {
     if (error) *error = s;
@@ -36,7 +40,7 @@ double median_ms(int repeats, const std::function<Status()>& fn, Status* error) 
       if (error) *error = s;
       return 0.0;
     }
-    times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    times.push_back(ms_since(t0));
   }
   return median(times);
 }

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -28,6 +29,9 @@ void add_common_options(CLI::App* cmd, BenchOptions& options);
 double median_ms(int repeats, const std::function<Status()>& fn, Status* error);
 
 double median(std::vector<double> values);
+
+// Wall milliseconds since `t0`.
+double ms_since(std::chrono::steady_clock::time_point t0);
 
 // Adds "machine" facts (device, driver, fingerprint, CPU threads) to `doc`,
 // writes <out_dir>/<name>.json atomically, prints its path (and the document

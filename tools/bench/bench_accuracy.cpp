@@ -209,7 +209,7 @@ int run(const Options& o) {
       const auto r0 = std::chrono::steady_clock::now();
       auto ref = render_reference(std::span(&ds.volume, 1), cam, ref_settings, w, h, ro);
       if (!ref) return cli::fail(ref.status());
-      reference_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - r0).count();
+      reference_ms += ms_since(r0);
       scene_info.push_back({{"dataset", ds.name}, {"view", views[vi].name}, {"azimuth", views[vi].azimuth},
                             {"elevation", views[vi].elevation}, {"distance", views[vi].distance}});
       std::fprintf(stderr, "accuracy: %s, %s: reference done\n", ds.name.c_str(), views[vi].name.c_str());
@@ -247,8 +247,7 @@ int run(const Options& o) {
         for (size_t k = 0; k < variants.size(); ++k) {
           const auto t0 = std::chrono::steady_clock::now();
           if (Status s = render_once(variants[k], nullptr); !s) return cli::fail(s);
-          results[k][si].ms.push_back(
-              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+          results[k][si].ms.push_back(ms_since(t0));
         }
     }
   }
@@ -323,22 +322,22 @@ int run(const Options& o) {
   // Roofline ratio of the default step (no early termination, so the sample
   // count is exact): samples/s against the trilinear sampling ceiling.
   if (o.roofline) {
-    auto roof = measure_roofline(ctx, o.common.repeats);
+    // The frames below and the ceiling kernel are timed in turn, so drift falls on both alike.
+    auto ceiling = SamplingCeiling::create(ctx);
+    if (!ceiling) return cli::fail(ceiling.status());
+    auto roof = measure_roofline(ctx, **ceiling, o.common.repeats);
     if (!roof) return cli::fail(roof.status());
     Variant v = variants[default_index];
     v.settings.early_termination = 0.0;
     const Dataset& ds = datasets[0];
     const Camera cam = view_camera(ds.volume, views[0]);
-    // The frames and the ceiling kernel in turn, so drift falls on both alike.
-    auto ceiling = SamplingCeiling::create(ctx);
-    if (!ceiling) return cli::fail(ceiling.status());
     BrickFrameStats st;
     std::vector<double> wall_ms, gpu_ms, ceiling_ms;
     for (int i = -1; i < o.common.repeats; ++i) {  // i = -1: warm-up
       const auto t0 = std::chrono::steady_clock::now();
       if (Status s = ds.full->render_float(cam, v.settings, 256, 256, {}, &st).status(); !s.is_ok())
         return cli::fail(s);
-      const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      const double wall = ms_since(t0);
       auto c = (*ceiling)->time_ms();
       if (!c) return cli::fail(c.status());
       if (i < 0) continue;

@@ -102,7 +102,7 @@ Result<SceneTimes> measure(gpu::Context& ctx, SamplingCeiling& ceiling, const Sc
       f.sample_work = works[w];
       const auto t0 = std::chrono::steady_clock::now();
       VXR_ASSIGN_OR_RETURN(t[w].image, r->render(cam, sc.settings, f, kSize, kSize, &t[w].stats));
-      wall[w].push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      wall[w].push_back(ms_since(t0));
       gpu[w].push_back(t[w].stats.gpu_ms);
     }
     VXR_ASSIGN_OR_RETURN(double ms, ceiling.time_ms());
@@ -131,15 +131,15 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
       if (!gpu) return cli::fail(gpu.status());
       gpu::Context& ctx = **gpu;
       std::fprintf(stderr, "roofline: calibrating %s ...\n", ctx.info().name.c_str());
-      auto roof = measure_roofline(ctx, opt->repeats);
+      // Timed again in turn with each scene's frames: its share is taken against that.
+      auto ceiling = SamplingCeiling::create(ctx);
+      if (!ceiling) return cli::fail(ceiling.status());
+      auto roof = measure_roofline(ctx, **ceiling, opt->repeats);
       if (!roof) return cli::fail(roof.status());
       auto made = scenes();
       if (!made) return cli::fail(made.status());
       std::fprintf(stderr, "roofline: shader copy %.1f GB/s, vkCmdCopyBuffer %.1f GB/s, trilinear %.0f M samples/s\n",
                    roof->copy_gb_per_s, roof->transfer_gb_per_s, roof->trilinear_samples_per_s / 1e6);
-      // Timed again in turn with each scene's frames: its share is taken against that.
-      auto ceiling = SamplingCeiling::create(ctx);
-      if (!ceiling) return cli::fail(ceiling.status());
       nlohmann::json rows = nlohmann::json::array();
       for (const Scene& sc : *made) {
         auto times = measure(ctx, **ceiling, sc, opt->repeats);

@@ -152,17 +152,16 @@ Result<double> SamplingCeiling::time_ms() {
     vkCmdPushConstants(cmd, res_->pipeline.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), push);
     vkCmdDispatch(cmd, kGrid / 8, kGrid / 8, 1);
   }));
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return ms_since(t0);
 }
 
 namespace {
 
-Result<double> time_sampling(gpu::Context& ctx, int repeats) {
-  VXR_ASSIGN_OR_RETURN(auto ceiling, SamplingCeiling::create(ctx));
-  VXR_RETURN_IF_ERROR(ceiling->time_ms().status());  // warm-up, as median_ms
+Result<double> time_sampling(SamplingCeiling& ceiling, int repeats) {
+  VXR_RETURN_IF_ERROR(ceiling.time_ms().status());  // warm-up, as median_ms
   std::vector<double> ms;
   for (int i = 0; i < repeats; ++i) {
-    VXR_ASSIGN_OR_RETURN(double t, ceiling->time_ms());
+    VXR_ASSIGN_OR_RETURN(double t, ceiling.time_ms());
     ms.push_back(t);
   }
   return median(ms);
@@ -170,10 +169,10 @@ Result<double> time_sampling(gpu::Context& ctx, int repeats) {
 
 }  // namespace
 
-Result<Roofline> measure_roofline(gpu::Context& ctx, int repeats) {
+Result<Roofline> measure_roofline(gpu::Context& ctx, SamplingCeiling& ceiling, int repeats) {
   Roofline r;
   VXR_ASSIGN_OR_RETURN(r.copy_ms, time_copy(ctx, repeats));
-  VXR_ASSIGN_OR_RETURN(r.sample_ms, time_sampling(ctx, repeats));
+  VXR_ASSIGN_OR_RETURN(r.sample_ms, time_sampling(ceiling, repeats));
   VXR_ASSIGN_OR_RETURN(r.transfer_ms, time_transfer(ctx, repeats));
   // The transfer run also includes one fill of the source: kCopyBytes written.
   r.transfer_gb_per_s = (2.0 * kCopyBytes * kCopyDispatches + kCopyBytes) / (r.transfer_ms * 1e-3) / 1e9;

@@ -20,9 +20,6 @@ struct Roofline {
   double sample_ms = 0.0;
 };
 
-// Takes about a second on lavapipe; `repeats` timed runs each, median kept.
-Result<Roofline> measure_roofline(gpu::Context& ctx, int repeats);
-
 // The trilinear-sampling kernel, set up once and timed on demand, so a
 // benchmark can time it in turn with its own frames: on a shared machine a
 // ratio of two measurements taken in turn drifts far less than one of
@@ -41,5 +38,9 @@ class SamplingCeiling {
   gpu::Context& ctx_;
   std::unique_ptr<Resources> res_;
 };
+
+// Takes about a second on lavapipe; `repeats` timed runs each, median kept.
+// The trilinear figure is `ceiling`'s (which a caller may time again later).
+Result<Roofline> measure_roofline(gpu::Context& ctx, SamplingCeiling& ceiling, int repeats);
 
 }  // namespace vxr::bench
