@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# Installs every Debian package in ci/packages.txt. Idempotent: does nothing
-# when all are present. Not root: prints the exact apt-get line and exits 1.
+# Installs every Debian package in ci/packages.txt (or in the list files
+# given, e.g. ci/packages-peer.txt). Idempotent: does nothing when all are
+# present. Not root: prints the exact apt-get line and exits 1.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-mapfile -t pkgs < <(grep -v '^\s*#' "$here/packages.txt" | sed '/^\s*$/d')
+lists=("$@")
+((${#lists[@]})) || lists=("$here/packages.txt")
+mapfile -t pkgs < <(cat "${lists[@]}" | grep -v '^\s*#' | sed '/^\s*$/d')
 
 missing=()
 for p in "${pkgs[@]}"; do

@@ -13,15 +13,23 @@
 // Opacity is per world unit (unit distance 1, VTK's default scalar opacity
 // unit distance), so the MRI's 5x thicker z voxels absorb 5x along z as in
 // VTK; --opacity-unit-distance 0 gives vxr's per-voxel opacity instead.
+//
+// The report names each scene's camera and transfer function; with
+// --export-scenes the level-0 voxels and the reference image go beside it,
+// so another tool can draw the same scenes and be scored against the same
+// reference (tools/peer/vtk_peer.py, run by ci/peer-vtk.sh).
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "assets/assets.h"
 #include "bench.h"
 #include "bench/brick_timing.h"
+#include "core/output_file.h"
 #include "core/progress.h"
 #include "render/lod/brick_renderer.h"
 #include "render/reference_renderer.h"
@@ -43,6 +51,7 @@ struct Options {
   double reference_step = 0.125;
   double rmse_goal = 1.5;  // 8-bit units
   double opacity_unit_distance = 1.0;  // world units; 0: per voxel
+  bool export_scenes = false;          // write each scene's voxels and reference image beside the report
 };
 
 struct Scene {
@@ -82,6 +91,49 @@ Result<std::vector<Scene>> scenes(double unit_distance) {
   return out;
 }
 
+// File names for a scene's exported data: "mri ea" -> "peer-mri-ea".
+std::string scene_slug(const std::string& name) {
+  std::string s = "peer-";
+  for (char c : name) s += std::isalnum(static_cast<unsigned char>(c)) ? c : '-';
+  return s;
+}
+
+// What another tool needs to draw the scene as vxr does: the volume as it
+// sits in the world (voxel centres at (i + 0.5) * voxel_size - extent / 2,
+// plus the box centre; trilinear, clamped at the box), the camera and the
+// transfer function.
+nlohmann::json describe_scene(const Scene& sc, const VolumePlacement& placed, const Camera& cam, uint32_t size) {
+  const RenderSettings& s = sc.settings;
+  const ChannelSettings& ch = s.channels[0];
+  nlohmann::json opacity = nlohmann::json::array();
+  for (const OpacityPoint& p : ch.opacity_points) opacity.push_back({p.x, p.opacity});
+  return {{"volume", {{"dims", sc.level0.dims}, {"dtype", dtype_name(sc.level0.dtype)},
+                      {"voxel_size", placed.voxel_size},
+                      {"centre", {placed.origin.x, placed.origin.y, placed.origin.z}}}},
+          {"camera", {{"eye", {cam.eye.x, cam.eye.y, cam.eye.z}},
+                      {"target", {cam.target.x, cam.target.y, cam.target.z}},
+                      {"up", {cam.up.x, cam.up.y, cam.up.z}},
+                      {"fov_y_deg", cam.fov_y_deg},
+                      {"image_size", {size, size}}}},
+          {"transfer", {{"model", optical_model_name(s.model)},
+                        {"window", {ch.window_lo, ch.window_hi}},
+                        {"colormap", ch.colormap},
+                        {"opacity_points", opacity},
+                        {"density", s.density},
+                        {"opacity_unit_distance", s.opacity_unit_distance},
+                        {"early_termination", s.early_termination}}}};
+}
+
+// Writes the scene's level-0 voxels (x fastest, little-endian) and its
+// reference image (8-bit RGBA over black, top row first) into `dir`.
+Result<nlohmann::json> export_scene(const std::string& dir, const Scene& sc, const std::vector<uint8_t>& ref_px) {
+  const std::string slug = scene_slug(sc.name);
+  const std::string volume = slug + ".raw", reference = slug + "-reference.rgba";
+  VXR_RETURN_IF_ERROR(write_file_atomically((std::filesystem::path(dir) / volume).string(), sc.level0.data));
+  VXR_RETURN_IF_ERROR(write_file_atomically((std::filesystem::path(dir) / reference).string(), ref_px));
+  return nlohmann::json{{"volume", volume}, {"reference_rgba", reference}};
+}
+
 int run(const Options& o) {
   auto gpu = open_gpu();
   if (!gpu) return fail(gpu.status());
@@ -105,6 +157,14 @@ int run(const Options& o) {
     auto ref = render_reference(std::span(&sc.level0, 1), cam, sc.settings, o.size, o.size, {o.reference_step, 0});
     if (!ref) return fail(ref.status());
     const std::vector<uint8_t> ref_px = over_black(to_rgba8(*ref)).pixels;
+    nlohmann::json scene_doc = describe_scene(sc, (*r)->placement(), cam, o.size);
+    if (o.export_scenes) {
+      std::error_code ec;
+      std::filesystem::create_directories(o.common.out_dir, ec);
+      auto files = export_scene(o.common.out_dir, sc, ref_px);
+      if (!files) return fail(files.status());
+      scene_doc["files"] = *files;
+    }
     progress.advance(1);
     nlohmann::json rows = nlohmann::json::array();
     double front_step = 0.0, front_speedup = 0.0, front_on_ms = 0.0;
@@ -149,10 +209,11 @@ int run(const Options& o) {
     if (front_step > 0.0)
       at_goal = {{"step_voxels", front_step}, {"on_wall_ms", front_on_ms}, {"speedup_wall", front_speedup}};
     const auto& vs = sc.level0.voxel_size;
-    per_scene.push_back({{"scene", sc.name},
-                         {"voxel_size", {vs[0], vs[1], vs[2]}},
-                         {"steps", rows},
-                         {"coarsest_step_within_goal", at_goal}});
+    scene_doc["scene"] = sc.name;
+    scene_doc["voxel_size"] = {vs[0], vs[1], vs[2]};
+    scene_doc["steps"] = rows;
+    scene_doc["coarsest_step_within_goal"] = at_goal;
+    per_scene.push_back(std::move(scene_doc));
     if (front_step > 0.0)
       std::printf("%-18s coarsest step with rmse <= %.2f: %.3f voxels, %.2f ms, skipping %.2fx\n", sc.name.c_str(),
                   o.rmse_goal, front_step, front_on_ms, front_speedup);
@@ -185,6 +246,9 @@ void add_peer_bench(CLI::App& bench, cli::Invocation& inv) {
   cmd->add_option("--opacity-unit-distance", o->opacity_unit_distance,
                   "opacity per this many world units, as VTK (default 1); 0: per voxel")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--export-scenes", o->export_scenes,
+                "write each scene's level-0 voxels (.raw) and reference image (.rgba) beside the report, for "
+                "tools/peer/vtk_peer.py");
   add_common_options(cmd, o->common);
   cmd->callback([&inv, o] { inv.run = [o] { return run(*o); }; });
 }
