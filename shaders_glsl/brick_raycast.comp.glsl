@@ -20,6 +20,7 @@
 // an apron of 2 voxels for them (BrickPool).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_vote : require
 
 #include "shared/brick_params.h"
@@ -63,6 +64,9 @@ layout(binding = 12) uniform samplerBuffer transfer_rows;
 // loads a uint at per-ray offsets there without a branch per ray (a storage buffer has
 // one): the MRI's E-A frame at step 0.5 took 172 -> 158 ms (`vxr bench peer`).
 layout(std140, binding = 14) uniform CellBitsWindow { uvec4 cell_bits_window[VXR_CELL_BITS_WINDOW_WORDS / 4u]; };
+// The start of this view's records of binding 4 again, as a uniform buffer
+// (specialisation constant 108; see brick_record).
+layout(std140, binding = 15) uniform BrickWindow { BrickRecord brick_window[VXR_BRICK_WINDOW_RECORDS]; };
 
 layout(push_constant) uniform Push { BrickCastParams p; };
 
@@ -73,6 +77,19 @@ layout(constant_id = 106) const bool VXR_SC_CELLS = true;
 // VXR_SAMPLE_*: anything but SHADE is a benchmark's probe (shared/brick_params.h);
 // its pixels show what the probe summed, not an image.
 layout(constant_id = 107) const uint VXR_SC_SAMPLE_WORK = VXR_SAMPLE_SHADE;
+// The brick records through the uniform window (binding 15), set where the
+// view's records fit it: on lavapipe a storage buffer load loops over the
+// lanes with a branch per lane and component, a uniform one gathers. A
+// constant, not a flag: lavapipe runs both sides of a branch on a flag
+// (MRI E-A at steps 2 and 0.5: 59.1 and 123.8 ms against 61.8 and 128.0,
+// min of 6; with a flag, no gain).
+layout(constant_id = 108) const bool VXR_SC_RECORDS_UNIFORM = false;
+
+// Brick b's record, read once per brick a ray enters.
+BrickRecord brick_record(uint b) {
+  if (VXR_SC_RECORDS_UNIFORM) return brick_window[b];  // (a ?: of the two block types is not valid SPIR-V)
+  return bricks[b];
+}
 
 // The ray's unit direction in level-0 voxels: samples are taken in the brick's
 // local voxels, depth colour is measured along the whole ray from P.eye.
@@ -334,28 +351,26 @@ bool walk_take(inout WalkFound f, CellWalk w, bool empty, bool extend, int n) {
 
 // The ray's segment [t0, t1) inside brick b (its clip box and cut plane), in
 // t units (level-0 voxels along dir). False when it misses.
-bool segment(uint b, vec3 dir, out float t0, out float t1) {
-  const vec3 e = bricks[b].eye.xyz;
-  const vec3 dl = dir * bricks[b].scale.xyz;  // local voxels per unit t
-  const vec3 lo = bricks[b].box_lo.xyz, hi = bricks[b].box_hi.xyz;
-  // Slab test. A ray parallel to a slab lies in it when lo <= e < hi: a face
-  // plane belongs to the box whose low face it is (as in the CPU reference),
-  // so of two neighbouring bricks exactly one marches a ray lying in their
-  // shared face; that axis then does not bound t (no 0 * inf).
-  vec3 tmin = vec3(-1.0 / 0.0), tmax = vec3(1.0 / 0.0);
-  for (int a = 0; a < 3; ++a) {
-    if (dl[a] == 0.0) {
-      if (e[a] < lo[a] || e[a] >= hi[a]) return false;
-      continue;
-    }
-    const float inv = 1.0 / dl[a];
-    const float ta = (lo[a] - e[a]) * inv, tb = (hi[a] - e[a]) * inv;
-    tmin[a] = min(ta, tb);
-    tmax[a] = max(ta, tb);
-  }
+bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
+  const vec3 e = br.eye.xyz;
+  const vec3 dl = dir * br.scale.xyz;  // local voxels per unit t
+  const vec3 lo = br.box_lo.xyz, hi = br.box_hi.xyz;
+  // Slab test, the three axes at once (an axis loop indexes its vectors
+  // lane by lane on lavapipe). A ray parallel to a slab lies in it when
+  // lo <= e < hi: a face plane belongs to the box whose low face it is (as in
+  // the CPU reference), so of two neighbouring bricks exactly one marches a
+  // ray lying in their shared face; that axis then does not bound t (its
+  // 0 * inf is selected away, never used).
+  const bvec3 parallel = equal(dl, vec3(0.0));
+  const uvec3 outside = uvec3(lessThan(e, lo)) | uvec3(greaterThanEqual(e, hi));
+  if (any(bvec3(uvec3(parallel) & outside))) return false;
+  const vec3 inv = 1.0 / dl;
+  const vec3 ta = (lo - e) * inv, tb = (hi - e) * inv;
+  const vec3 tmin = mix(min(ta, tb), vec3(-1.0 / 0.0), parallel);
+  const vec3 tmax = mix(max(ta, tb), vec3(1.0 / 0.0), parallel);
   t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
   t1 = min(min(min(tmax.x, tmax.y), tmax.z), g_t_limit);
-  const vec4 pl = bricks[b].plane;
+  const vec4 pl = br.plane;
   if (pl.xyz != vec3(0.0)) {
     const float num = dot(pl.xyz, e) + pl.w, den = dot(pl.xyz, dl);
     if (den > 0.0) t0 = max(t0, -num / den);
@@ -418,7 +433,7 @@ void main() {
 
   float t0, t1;
   // A work item's pixel that misses its brick leaves the accumulation alone.
-  if (item_mode && !segment(first, dir, t0, t1)) return;
+  if (item_mode && !segment(brick_record(first), dir, t0, t1)) return;
 
   VxrRay ray = vxr_begin(P, dir);
   if ((flags & VXR_BRICK_LOAD_ACCUM) != 0u) {
@@ -436,18 +451,23 @@ void main() {
     last = list.x + list.y;
   }
   for (uint j = first; j < last && !ray.done; ++j) {
-    const uint b = tile_lists ? items[j].x : j;
-    if (!item_mode && !segment(b, dir, t0, t1)) continue;
-    const vec3 e = bricks[b].eye.xyz;
-    g_atlas_origin = bricks[b].atlas.xyz;
-    const vec3 dl = dir * bricks[b].scale.xyz;
+    // Every active lane of a subgroup is at the same j (the list is its
+    // workgroup's, and a ray that ends leaves the loop): the broadcast says
+    // so, for compilers that then load the record once per subgroup (GPUs'
+    // scalar loads; lavapipe still gathers, see brick_record).
+    const uint b = subgroupBroadcastFirst(tile_lists ? items[j].x : j);
+    const BrickRecord br = brick_record(b);
+    if (!item_mode && !segment(br, dir, t0, t1)) continue;
+    const vec3 e = br.eye.xyz;
+    g_atlas_origin = br.atlas.xyz;
+    const vec3 dl = dir * br.scale.xyz;
     const float dt = P.march.x / length(dl);  // one local step, in t units
     const float i0 = ceil(t0 / dt - offset);
     const int n = int(ceil(t1 / dt - offset) - i0);
     // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture).
-    const bool cells = VXR_SC_CELLS && p.pass.y != 0u && bricks[b].atlas.w >= 0.0;
+    const bool cells = VXR_SC_CELLS && p.pass.y != 0u && br.atlas.w >= 0.0;
     const uint cell_base = !cells ? 0u
-                           : kReduceModel ? uint(bricks[b].atlas.w) * uint(VXR_SC_CHANNELS) * cell_count()
+                           : kReduceModel ? uint(br.atlas.w) * uint(VXR_SC_CHANNELS) * cell_count()
                                           : b * cell_words();
     // The walk in sample indices: sample k of this brick is at e + (k + shift) * step.
     const vec3 inv_step = 1.0 / (dl * dt);

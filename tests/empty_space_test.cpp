@@ -404,10 +404,11 @@ TEST_CASE("empty-space cells: walking 2-voxel cells or 2x2x2 groups of them give
   }
 }
 
-TEST_CASE("empty-space cells: the cell bits read through the uniform window and the storage buffer agree") {
+TEST_CASE("empty-space cells: the cell bits and brick records read through the uniform windows and the storage buffers agree") {
   test::GpuTestScope scope;
   BrickRendererOptions uniform, storage;
   storage.uniform_cell_bits = false;
+  storage.uniform_brick_records = false;
   for (const VariantFrames& v : vessel_variants(uniform, storage)) {
     INFO(v.what);
     CHECK(test::looks_non_blank(v.a));

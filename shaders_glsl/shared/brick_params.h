@@ -32,6 +32,10 @@ using uvec4 = glm::uvec4;
 #define VXR_BRICK_CELL_BITS_UNIFORM 1024u
 // Binding 14's declared size: 4096 uvec4, 64 KiB.
 #define VXR_CELL_BITS_WINDOW_WORDS 16384u
+// Binding 15's declared size (a uniform buffer over this view's records of
+// binding 4, read where specialisation constant 108 says): 680 records of 96
+// bytes, just under 64 KiB.
+#define VXR_BRICK_WINDOW_RECORDS 680u
 
 // What each sample does (specialisation constant 107, VXR_SC_SAMPLE_WORK):
 // the optical model, or for `vxr bench roofline`'s split of an E-A frame's

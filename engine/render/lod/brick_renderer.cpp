@@ -32,6 +32,7 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {12, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // transfer rows
       {13, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits
       {14, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits' window
+      {15, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // brick records' window
   };
 }
 
@@ -251,7 +252,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   r->value_scales_.assign(r->pool_->channels(), brick_value_scale(source.info().dtype));
   const auto b = bindings();
   r->pipes_ = options.pipelines ? options.pipelines : std::make_shared<BrickPipelines>();
-  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant(VXR_MODEL_EMISSION_ABSORPTION, 1, false, false, false, false, true));
+  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant(VXR_MODEL_EMISSION_ABSORPTION, 1, false, false, false, false, true, true));
   if (options.max_views == 0) return invalid_argument("brick renderer: max_views must be at least 1");
   VXR_ASSIGN_OR_RETURN(r->desc_pool_, gpu::create_descriptor_pool(ctx, b, options.max_views + 1));
   VXR_ASSIGN_OR_RETURN(r->mono_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_->set_layout));
@@ -277,7 +278,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->tf_staging_, gpu::create_buffer(ctx, {tf_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                                                 gpu::MemoryIntent::kUpload, "transfer function staging"}));
   VXR_ASSIGN_OR_RETURN(r->table_, gpu::create_buffer(ctx, {uint64_t(options.max_bricks) * sizeof(shader::BrickRecord),
-                                                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                                                            gpu::MemoryIntent::kUpload, "brick table"}));
   VXR_ASSIGN_OR_RETURN(r->counters_, gpu::create_buffer(ctx, {16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                               gpu::MemoryIntent::kReadback, "brick counters"}));
@@ -321,6 +322,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
     gpu::write_uniform_texel_buffer(ctx, set, 12, r->transfer_rows_.get());
   }
   gpu::write_storage_buffer(ctx, r->mono_set_, 4, r->table_.buffer);
+  gpu::write_uniform_buffer(ctx, r->mono_set_, 15, r->table_.buffer, r->brick_window_bytes(0));
   gpu::write_storage_buffer(ctx, r->mono_set_, 6, r->items_.buffer);
   gpu::write_uniform_buffer(ctx, r->mono_set_, 7, r->params_.buffer, sizeof(shader::RaycastParams));
   VXR_RETURN_IF_ERROR(r->ensure_target(1, 1));  // the storage binding needs an image even when views blit
@@ -358,6 +360,11 @@ Status BrickRenderer::ensure_cell_keys() {
 uint64_t BrickRenderer::cell_bits_window_bytes(uint64_t offset) const {
   return std::min<uint64_t>({uint64_t(VXR_CELL_BITS_WINDOW_WORDS) * 4, ctx_.limits().maxUniformBufferRange,
                              cell_bits_.size - std::min(offset, cell_bits_.size)});
+}
+
+uint64_t BrickRenderer::brick_window_bytes(uint64_t offset) const {
+  return std::min<uint64_t>({uint64_t(VXR_BRICK_WINDOW_RECORDS) * sizeof(shader::BrickRecord),
+                             ctx_.limits().maxUniformBufferRange, table_.size - std::min(offset, table_.size)});
 }
 
 uint64_t BrickRenderer::cell_bits_align() const {
@@ -459,14 +466,14 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
 }
 
 Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
-                                                                SampleWork work) {
-  // Specialisation constants: raycast_core.glsl ids 100..105, brick_raycast.comp 106, 107.
+                                                                bool records_uniform, SampleWork work) {
+  // Specialisation constants: raycast_core.glsl ids 100..105, brick_raycast.comp 106..108.
   const uint32_t n = channels();
   const bool gradient = s.gradient_opacity.enabled, depth = s.depth_color != DepthColorMode::kOff;
   bool gamma = false;
   for (uint32_t c = 0; c < n && c < s.channels.size(); ++c) gamma = gamma || s.channels[c].gamma != 1.0;
   const bool naive = !s.opacity_correction;
-  return variant(model, n, gradient, depth, gamma, naive, cells, work);
+  return variant(model, n, gradient, depth, gamma, naive, cells, records_uniform, work);
 }
 
 static_assert(uint32_t(SampleWork::kShade) == VXR_SAMPLE_SHADE && uint32_t(SampleWork::kFetchOnly) == VXR_SAMPLE_FETCH_ONLY &&
@@ -474,10 +481,11 @@ static_assert(uint32_t(SampleWork::kShade) == VXR_SAMPLE_SHADE && uint32_t(Sampl
               "SampleWork is spec constant 107's value");
 
 Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint32_t n, bool gradient, bool depth,
-                                                           bool gamma, bool naive, bool cells, SampleWork work) {
+                                                           bool gamma, bool naive, bool cells, bool records_uniform,
+                                                           SampleWork work) {
   const uint32_t key = model | (n << 4) | (gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u) |
                        (gamma ? 1u << 10 : 0u) | (naive ? 1u << 11 : 0u) | (cells ? 1u << 12 : 0u) |
-                       (uint32_t(work) << 13);
+                       (uint32_t(work) << 13) | (records_uniform ? 1u << 15 : 0u);
   std::map<uint32_t, gpu::ComputePipeline>& variants = pipes_->variants;
   if (auto it = variants.find(key); it != variants.end()) return &it->second;
   VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p,
@@ -489,7 +497,8 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint3
                                                             {104, gamma ? 1u : 0u},
                                                             {105, naive ? 1u : 0u},
                                                             {106, cells ? 1u : 0u},
-                                                            {107, uint32_t(work)}}}));
+                                                            {107, uint32_t(work)},
+                                                            {108, records_uniform ? 1u : 0u}}}));
   return &variants.emplace(key, std::move(p)).first->second;
 }
 
@@ -681,7 +690,10 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                                     (reduce && walk.cell_size >= 2.0 * s.step_voxels));
   const uint32_t cells_per_axis = cells ? walk.cells_per_axis : 0u;
   const uint32_t range_cells_per_axis = pool_->cells().cells_per_axis;
-  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model, cells, work));
+  // The records through their uniform window when they all fit it (binding 15 starts at the view's first).
+  const bool records_uniform =
+      opt_.uniform_brick_records && uint64_t(bricks) * sizeof(shader::BrickRecord) <= brick_window_bytes(0);
+  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model, cells, records_uniform, work));
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(walk.cell_size));
   if (target.warp_x.active() || target.warp_y.active())
@@ -1020,7 +1032,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   st.lod = lod.stats;
 
   // This view's slices of the frame's table and work list (offsets aligned for descriptors).
-  const VkDeviceSize salign = std::max<VkDeviceSize>(ctx_.limits().minStorageBufferOffsetAlignment, 16);
+  const VkDeviceSize salign = std::max<VkDeviceSize>({ctx_.limits().minStorageBufferOffsetAlignment,
+                                                      ctx_.limits().minUniformBufferOffsetAlignment, 16});
   const VkDeviceSize table_base = align_up(table_used_, salign);
   const VkDeviceSize table_bytes = std::max<size_t>(lod.draw.size(), 1) * sizeof(shader::BrickRecord);
   if (table_base + table_bytes > table_.size)
@@ -1080,6 +1093,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   gpu::write_storage_image(ctx_, set, 9, target.under.present() ? target.under.depth : no_under_depth_.view.get());
   gpu::write_storage_image(ctx_, set, 10, target.under.present() ? target.under.color : no_under_color_.view.get());
   gpu::write_storage_buffer(ctx_, set, 4, table_.buffer, table_bytes, table_base);
+  gpu::write_uniform_buffer(ctx_, set, 15, table_.buffer, brick_window_bytes(table_base), table_base);
   gpu::write_storage_buffer(ctx_, set, 6, items_.buffer, items_bytes, items_base);
   gpu::write_uniform_buffer(ctx_, set, 7, params_.buffer, sizeof(shader::RaycastParams), params_offset);
   // This view's region of the cell bits (the finest walk's size): the rays

@@ -105,6 +105,10 @@ struct BrickRendererOptions {
   // through a storage buffer. False: always the storage buffer (tests pin
   // that both agree).
   bool uniform_cell_bits = true;
+  // The rays read the brick records through a uniform buffer while the
+  // view's records fit its range (680 records, or what the device allows),
+  // else through a storage buffer. False: always the storage buffer.
+  bool uniform_brick_records = true;
   BrickCellWalk cell_walk = BrickCellWalk::kAuto;
   // Shared with other renderers on the same context (they must outlive none
   // of its frames); null: this renderer's own.
@@ -245,6 +249,8 @@ class BrickRenderer final : public VolumeRenderer {
   // The uniform window over the cell bits from `offset` (a view's region): 64 KiB or what the device allows.
   uint64_t cell_bits_window_bytes(uint64_t offset) const;
   uint64_t cell_bits_align() const;  // of a view's region: both its descriptors' offset alignments
+  // The uniform window over the brick records from `offset` (a view's first record): 680 records or what the device allows.
+  uint64_t brick_window_bytes(uint64_t offset) const;
   // Rebuilds the pool with `apron` (waits for the device; rebinds every set).
   Status rebuild_pool(uint32_t apron);
   // The frame's timepoint: its top level pinned (begin_frame, before any copy is recorded).
@@ -254,12 +260,14 @@ class BrickRenderer final : public VolumeRenderer {
   void bind_atlases(VkDescriptorSet set, const std::vector<const gpu::Image*>& atlases);
   std::vector<const gpu::Image*> pool_atlases() const;
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
-  // features) and for whether its dispatches use empty-space cells.
+  // features), for whether its dispatches use empty-space cells and for
+  // whether the view's brick records fit their uniform window.
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
-                                                   SampleWork work);
+                                                   bool records_uniform, SampleWork work);
   // The variant for these specialisation constants, built on first use.
   Result<const gpu::ComputePipeline*> variant(uint32_t model, uint32_t channels, bool gradient, bool depth, bool gamma,
-                                              bool naive, bool cells, SampleWork work = SampleWork::kShade);
+                                              bool naive, bool cells, bool records_uniform,
+                                              SampleWork work = SampleWork::kShade);
   // The part of brick `key` its rays march, in its local voxels: the brick
   // clipped to the ROI and, with `cells` (cell skipping on), to the box of
   // its cells that `cells` says may change a ray. Empty
