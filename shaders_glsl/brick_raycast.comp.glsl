@@ -60,9 +60,10 @@ layout(std430, binding = 13) buffer CellBits { uint cell_bits[]; };
 // per-ray offsets loads component by component, a storage buffer ray by
 // ray with a branch each (same floats).
 layout(binding = 12) uniform samplerBuffer transfer_rows;
-// The start of binding 13 again, as a uniform buffer (VXR_BRICK_CELL_BITS_UNIFORM): lavapipe
-// loads a uint at per-ray offsets there without a branch per ray (a storage buffer has
-// one): the MRI's E-A frame at step 0.5 took 172 -> 158 ms (`vxr bench peer`).
+// The start of binding 13 again, as a uniform buffer (specialisation constant
+// 109): lavapipe loads a uint at per-ray offsets there without a branch per
+// ray (a storage buffer has one): the MRI's E-A frame at step 0.5 took 172 ->
+// 158 ms (`vxr bench peer`).
 layout(std140, binding = 14) uniform CellBitsWindow { uvec4 cell_bits_window[VXR_CELL_BITS_WINDOW_WORDS / 4u]; };
 // The start of this view's records of binding 4 again, as a uniform buffer
 // (specialisation constant 108; see brick_record).
@@ -84,6 +85,9 @@ layout(constant_id = 107) const uint VXR_SC_SAMPLE_WORK = VXR_SAMPLE_SHADE;
 // (MRI E-A at steps 2 and 0.5: 59.1 and 123.8 ms against 61.8 and 128.0,
 // min of 6; with a flag, no gain).
 layout(constant_id = 108) const bool VXR_SC_RECORDS_UNIFORM = false;
+// The cell tests' emptiness bits through their uniform window (binding 14),
+// set where the view's bits fit it (a flag cost 1-2%: both sides ran).
+layout(constant_id = 109) const bool VXR_SC_CELL_BITS_UNIFORM = false;
 
 // Brick b's record, read once per brick a ray enters.
 BrickRecord brick_record(uint b) {
@@ -272,7 +276,7 @@ bool cell_is_empty(uint base, int cell, VxrRay r) {
   const uint m = VXR_SC_MODEL;
   if (!kReduceModel) {
     const uint w = base + uint(cell) / 32u;
-    const uint word = (p.pass.z & VXR_BRICK_CELL_BITS_UNIFORM) != 0u ? cell_bits_window[w / 4u][w % 4u] : cell_bits[w];
+    const uint word = VXR_SC_CELL_BITS_UNIFORM ? cell_bits_window[w / 4u][w % 4u] : cell_bits[w];
     return (word & (1u << (uint(cell) % 32u))) != 0u;
   }
   const uint count = cell_count();
@@ -524,11 +528,14 @@ void main() {
       // run goes on, instead of waiting masked: the iteration is paid anyway,
       // a sample in an empty cell changes nothing, and the lane's next walk
       // starts further on (MRI E-A at step 0.5: SIMD iterations 2.10M ->
-      // 1.88M for 7% more samples taken).
-      for (;; ++k) {
-        const bool in_run = k < run_end && !ray.done;
-        if (group_runs ? !subgroupAny(in_run) : !in_run) break;
-        if (!(k < n && !ray.done)) continue;
+      // 1.88M for 7% more samples taken). The group's iterations are counted
+      // once, by the longest run left: a vote each sample (until no lane is in
+      // its run) costs lavapipe a loop over the lanes. A lane that ends or
+      // leaves the brick drops out; the others go on.
+      const int left = k < run_end && !ray.done ? run_end - k : 0;
+      const int iterations = group_runs ? subgroupMax(left) : left;
+      for (int i = 0; i < iterations; ++i, ++k) {
+        if (k >= n || ray.done) break;
         // From the index: no drift. The segment is dt level-0 voxels long.
         const float t = (i0 + float(k) + offset) * dt;
         if (VXR_SC_SAMPLE_WORK == VXR_SAMPLE_SHADE) vxr_step(ray, P, e, dl, t, dt);

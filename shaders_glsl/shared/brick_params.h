@@ -26,11 +26,9 @@ using uvec4 = glm::uvec4;
 // 64 cells' keys (y * 64 ..) into binding 11, for the other models 64 words of emptiness
 // bits (y * 64 ..) into binding 13.
 #define VXR_BRICK_CLASSIFY 512u
-// The rays read the emptiness bits through binding 14 (a uniform buffer over the start of
-// binding 13), which lavapipe loads at per-ray offsets without a branch per ray. Set when
-// every brick's bits fit its range.
-#define VXR_BRICK_CELL_BITS_UNIFORM 1024u
-// Binding 14's declared size: 4096 uvec4, 64 KiB.
+// Binding 14's declared size (a uniform buffer over the start of this view's
+// emptiness bits in binding 13, read where specialisation constant 109 says):
+// 4096 uvec4, 64 KiB.
 #define VXR_CELL_BITS_WINDOW_WORDS 16384u
 // Binding 15's declared size (a uniform buffer over this view's records of
 // binding 4, read where specialisation constant 108 says): 680 records of 96

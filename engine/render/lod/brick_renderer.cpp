@@ -252,7 +252,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   r->value_scales_.assign(r->pool_->channels(), brick_value_scale(source.info().dtype));
   const auto b = bindings();
   r->pipes_ = options.pipelines ? options.pipelines : std::make_shared<BrickPipelines>();
-  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant(VXR_MODEL_EMISSION_ABSORPTION, 1, false, false, false, false, true, true));
+  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant(VXR_MODEL_EMISSION_ABSORPTION, 1, false, false, false, false, true, {true, true}));
   if (options.max_views == 0) return invalid_argument("brick renderer: max_views must be at least 1");
   VXR_ASSIGN_OR_RETURN(r->desc_pool_, gpu::create_descriptor_pool(ctx, b, options.max_views + 1));
   VXR_ASSIGN_OR_RETURN(r->mono_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_->set_layout));
@@ -466,14 +466,14 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
 }
 
 Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
-                                                                bool records_uniform, SampleWork work) {
-  // Specialisation constants: raycast_core.glsl ids 100..105, brick_raycast.comp 106..108.
+                                                                UniformWindows windows, SampleWork work) {
+  // Specialisation constants: raycast_core.glsl ids 100..105, brick_raycast.comp 106..109.
   const uint32_t n = channels();
   const bool gradient = s.gradient_opacity.enabled, depth = s.depth_color != DepthColorMode::kOff;
   bool gamma = false;
   for (uint32_t c = 0; c < n && c < s.channels.size(); ++c) gamma = gamma || s.channels[c].gamma != 1.0;
   const bool naive = !s.opacity_correction;
-  return variant(model, n, gradient, depth, gamma, naive, cells, records_uniform, work);
+  return variant(model, n, gradient, depth, gamma, naive, cells, windows, work);
 }
 
 static_assert(uint32_t(SampleWork::kShade) == VXR_SAMPLE_SHADE && uint32_t(SampleWork::kFetchOnly) == VXR_SAMPLE_FETCH_ONLY &&
@@ -481,11 +481,12 @@ static_assert(uint32_t(SampleWork::kShade) == VXR_SAMPLE_SHADE && uint32_t(Sampl
               "SampleWork is spec constant 107's value");
 
 Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint32_t n, bool gradient, bool depth,
-                                                           bool gamma, bool naive, bool cells, bool records_uniform,
+                                                           bool gamma, bool naive, bool cells, UniformWindows windows,
                                                            SampleWork work) {
   const uint32_t key = model | (n << 4) | (gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u) |
                        (gamma ? 1u << 10 : 0u) | (naive ? 1u << 11 : 0u) | (cells ? 1u << 12 : 0u) |
-                       (uint32_t(work) << 13) | (records_uniform ? 1u << 15 : 0u);
+                       (uint32_t(work) << 13) | (windows.records ? 1u << 15 : 0u) |
+                       (windows.cell_bits ? 1u << 16 : 0u);
   std::map<uint32_t, gpu::ComputePipeline>& variants = pipes_->variants;
   if (auto it = variants.find(key); it != variants.end()) return &it->second;
   VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p,
@@ -498,7 +499,8 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint3
                                                             {105, naive ? 1u : 0u},
                                                             {106, cells ? 1u : 0u},
                                                             {107, uint32_t(work)},
-                                                            {108, records_uniform ? 1u : 0u}}}));
+                                                            {108, windows.records ? 1u : 0u},
+                                                            {109, windows.cell_bits ? 1u : 0u}}}));
   return &variants.emplace(key, std::move(p)).first->second;
 }
 
@@ -690,10 +692,14 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                                     (reduce && walk.cell_size >= 2.0 * s.step_voxels));
   const uint32_t cells_per_axis = cells ? walk.cells_per_axis : 0u;
   const uint32_t range_cells_per_axis = pool_->cells().cells_per_axis;
-  // The records through their uniform window when they all fit it (binding 15 starts at the view's first).
-  const bool records_uniform =
-      opt_.uniform_brick_records && uint64_t(bricks) * sizeof(shader::BrickRecord) <= brick_window_bytes(0);
-  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model, cells, records_uniform, work));
+  // The records, and the E-A and emission cell tests' bits, through their
+  // uniform windows when all of the view's fit (bindings 15 and 14 start at
+  // the view's first).
+  UniformWindows windows;
+  windows.records = opt_.uniform_brick_records && uint64_t(bricks) * sizeof(shader::BrickRecord) <= brick_window_bytes(0);
+  windows.cell_bits = cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits && classify &&
+                      bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes(classify->bits_offset);
+  VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* pipe, pipeline_for(s, model, cells, windows, work));
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(walk.cell_size));
   if (target.warp_x.active() || target.warp_y.active())
@@ -712,12 +718,6 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->pipeline);
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set, 0, nullptr);
-  // E-A and emission cell tests read a bit per cell, through the uniform window when every brick's fit.
-  const uint32_t bits_flag =
-      cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits && classify &&
-              bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes(classify->bits_offset)
-          ? VXR_BRICK_CELL_BITS_UNIFORM
-          : 0u;
   bool classified = false;
   if (cells_per_axis > 0 && bricks > 0 && classify) {
     classify->model = model;
@@ -743,7 +743,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   }
   auto dispatch = [&](uint32_t first, uint32_t count, uint32_t flags) {
     p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), first, count);
-    p.pass = glm::uvec4(0, cells_per_axis, flags | bits_flag, range_cells_per_axis);
+    p.pass = glm::uvec4(0, cells_per_axis, flags, range_cells_per_axis);
     vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
     vkCmdDispatch(cmd, (w + 7) / 8, (h + 7) / 8, 1);
     ++dispatches;
@@ -760,7 +760,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
       for (uint32_t done = 0; done < wave.y; done += max_groups) {
         p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), 0, 0);
         p.pass = glm::uvec4(wave.x + done, cells_per_axis,
-                            under | VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM | bits_flag,
+                            under | VXR_BRICK_WORK_ITEMS | VXR_BRICK_LOAD_ACCUM | VXR_BRICK_STORE_ACCUM,
                             range_cells_per_axis);
         vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
         vkCmdDispatch(cmd, std::min(max_groups, wave.y - done), 1, 1);

@@ -259,14 +259,21 @@ class BrickRenderer final : public VolumeRenderer {
   Status pin_resident(uint32_t timepoint);
   void bind_atlases(VkDescriptorSet set, const std::vector<const gpu::Image*>& atlases);
   std::vector<const gpu::Image*> pool_atlases() const;
+  // Which per-ray reads go through a uniform buffer over their storage
+  // buffer (brick_raycast.comp constants 108, 109): where all of a view's
+  // fit. lavapipe runs both sides of a branch, so it is a constant.
+  struct UniformWindows {
+    bool records = false;    // the brick records (binding 15 over 4)
+    bool cell_bits = false;  // the E-A and emission cells' emptiness bits (14 over 13)
+  };
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
-  // features), for whether its dispatches use empty-space cells and for
-  // whether the view's brick records fit their uniform window.
+  // features), for whether its dispatches use empty-space cells and for the
+  // uniform windows it reads.
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
-                                                   bool records_uniform, SampleWork work);
+                                                   UniformWindows windows, SampleWork work);
   // The variant for these specialisation constants, built on first use.
   Result<const gpu::ComputePipeline*> variant(uint32_t model, uint32_t channels, bool gradient, bool depth, bool gamma,
-                                              bool naive, bool cells, bool records_uniform,
+                                              bool naive, bool cells, UniformWindows windows,
                                               SampleWork work = SampleWork::kShade);
   // The part of brick `key` its rays march, in its local voxels: the brick
   // clipped to the ROI and, with `cells` (cell skipping on), to the box of
