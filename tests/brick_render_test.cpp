@@ -106,6 +106,30 @@ TEST_CASE("brick render: single pass and multipass waves give the same image") {
   CHECK(ms.dispatches > 3);
 }
 
+TEST_CASE("brick render: tiled frames draw the tiles no brick touches with the brickless variant, same image") {
+  test::GpuTestScope scope;
+  auto src = make(128);
+  auto r = renderer(*src);
+  // Far away: the volume covers the middle of the image, most tiles touch no brick.
+  const Camera cam = orbit_camera(r->placement(), 30, 25, 3.0);
+  BrickFrameSettings f;
+  f.lod.force_level = 0;
+  f.mode = BrickPassMode::kSinglePass;
+  BrickFrameStats ss, ts;
+  const ImageRgba8 single = converge(*r, cam, vessels(), f, 96, 96, &ss);
+  f.mode = BrickPassMode::kTiled;
+  // A close view first fills the whole target: the far view's empty tiles must be written again.
+  const ImageRgba8 close = converge(*r, orbit_camera(r->placement(), 30, 25, 0.5), vessels(), f, 96, 96);
+  const ImageRgba8 tiled = converge(*r, cam, vessels(), f, 96, 96, &ts);
+  CHECK(close.pixels != single.pixels);
+  CHECK(test::looks_non_blank(tiled));
+  CHECK(tiled.pixels == single.pixels);
+  CHECK(ts.samples == ss.samples);
+  // The marched tiles, a barrier, then the empty ones: two dispatches after the cells were classified.
+  CHECK(ts.classify_passes == 0);
+  CHECK(ts.dispatches == 2);
+}
+
 TEST_CASE("brick render: paged through the pool equals the single-texture path within 1/255") {
   test::GpuTestScope scope;
   auto src = make(128);

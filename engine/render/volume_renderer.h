@@ -66,6 +66,7 @@ struct BrickFrameStats {
   uint32_t evicted = 0;
   double hit_rate = 1.0;         // wanted bricks already resident / wanted bricks
   uint32_t dispatches = 0;
+  uint32_t classify_passes = 0;  // of those, cell classifications (none where a view's inputs did not change)
   double traverse_ms = 0.0;      // CPU octree traversal
   double render_ms = 0.0;        // ray-cast submission, wall clock
   double gpu_ms = 0.0;           // BrickRenderer::render: the frame's commands on the GPU (timestamps; 0: none)

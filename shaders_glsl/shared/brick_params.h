@@ -17,6 +17,11 @@ using uvec4 = glm::uvec4;
 #define VXR_BRICK_STORE_FINAL 4u  // write the finished premultiplied RGBA8 pixel
 #define VXR_BRICK_WORK_ITEMS 8u   // workgroup i marches work item pass.x + i: (brick, tile x, tile y)
 #define VXR_BRICK_TILE_LISTS 16u  // workgroup (x, y) marches its tile's list: items[y * tiles_x + x] = (first, count)
+// Workgroup i takes the tile of entry pass.x + i: (tile index, x, y in pixels), not tile (x, y)
+// of the grid; with TILE_LISTS it marches that tile's list. Tiled frames dispatch the tiles
+// that some brick touches this way, and the others, where every ray is empty, with a pipeline
+// without the brick loop (specialisation constant 110).
+#define VXR_BRICK_TILE_SUBSET 4096u
 #define VXR_BRICK_OPAQUE 32u      // final pixel over black: alpha 1 (display targets)
 #define VXR_BRICK_QUANTIZE 64u    // final pixel rounded to 8 bits, v * 255 + 0.5 (UNORM targets: the one rounding rule)
 #define VXR_BRICK_FINAL_FLOAT 128u  // final pixel into the accumulation image (float), for a blit into the target

@@ -269,12 +269,13 @@ class BrickRenderer final : public VolumeRenderer {
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
   // features), for whether its dispatches use empty-space cells and for the
   // uniform windows it reads.
+  // `no_bricks`: the variant without the brick loop, for tiles no brick touches.
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
-                                                   UniformWindows windows, SampleWork work);
+                                                   UniformWindows windows, SampleWork work, bool no_bricks = false);
   // The variant for these specialisation constants, built on first use.
   Result<const gpu::ComputePipeline*> variant(uint32_t model, uint32_t channels, bool gradient, bool depth, bool gamma,
                                               bool naive, bool cells, UniformWindows windows,
-                                              SampleWork work = SampleWork::kShade);
+                                              SampleWork work = SampleWork::kShade, bool no_bricks = false);
   // The part of brick `key` its rays march, in its local voxels: the brick
   // clipped to the ROI and, with `cells` (cell skipping on), to the box of
   // its cells that `cells` says may change a ray. Empty
@@ -318,19 +319,28 @@ class BrickRenderer final : public VolumeRenderer {
   // `model`: the packed parameters' VXR_MODEL_* (control.x). `classify`: the
   // view's records, window, table and bits region (null: no cells walked);
   // when they are new, they are swapped into the view's entry of classified_.
+  // Where a view's work items are in its work list, as (first entry, count):
+  // the multipass waves, or a tiled frame's tiles that some brick touches
+  // and the tiles that none does (entries: tile index, x, y in pixels).
+  struct WorkSpans {
+    std::vector<glm::uvec2> waves;
+    glm::uvec2 marched_tiles{0, 0}, empty_tiles{0, 0};
+  };
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
-                     const std::vector<glm::uvec2>& waves, const RenderTarget& target, CellWalk cells,
-                     SampleWork work, CellClassInputs* classify, uint32_t* dispatches);
+                     const WorkSpans& spans, const RenderTarget& target, CellWalk cells,
+                     SampleWork work, CellClassInputs* classify, BrickFrameStats* stats);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
   // `dst` (capacity entries); returns (first item, count) per wave.
   // `ax`, `ay`: the ray grid (identity_warp, or the lens warp's).
   // `boxes`: per drawn brick, the world box its rays march (empty: none).
   Result<std::vector<glm::uvec2>> build_waves(const std::vector<BrickBox>& boxes, const LodView& view,
                                               const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
-  // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen rectangle touches it.
+  // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen
+  // rectangle touches it; then the tiles with a brick and those without
+  // (their spans go into `spans`).
   Status build_tile_lists(const std::vector<BrickBox>& boxes, const LodView& view, const WarpAxis& ax,
-                          const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
+                          const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used, WorkSpans* spans);
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
   gpu::Context& ctx_;
