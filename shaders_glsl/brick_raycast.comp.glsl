@@ -54,6 +54,9 @@ layout(binding = 10, rgba8) uniform readonly image2D under_color;
 // channel and cell, the key the ray's running value is tested against. E-A
 // and emission: per brick record, one bit per cell (set: empty), cell_words() words.
 layout(std430, binding = 11) buffer CellKeys { float cell_keys[]; };
+// Binding 11 again as R32F texels, for the rays' key tests: lavapipe loads a
+// storage buffer at per-ray offsets lane by lane behind a branch each.
+layout(binding = 16) uniform samplerBuffer cell_key_texels;
 layout(std430, binding = 13) buffer CellBits { uint cell_bits[]; };
 // Rows 0..3 of binding 1 again (the colour and opacity entries) as RGBA32F
 // texels, which lavapipe (Mesa 22) loads whole per ray; a uniform buffer at
@@ -287,7 +290,7 @@ bool cell_is_empty(uint base, int cell, VxrRay r) {
   const uint count = cell_count();
   for (int c = 0; c < VXR_SC_CHANNELS; ++c) {
     if (P.window[c].w == 0.0) continue;
-    const float key = cell_keys[base + uint(c) * count + uint(cell)];
+    const float key = texelFetch(cell_key_texels, int(base + uint(c) * count + uint(cell))).r;
     if (m == VXR_MODEL_MIP) {
       // Not above the running maximum: the maximum stays. Nothing taken yet: entry 0 must be clear.
       if (!(key <= r.reduce[c]) || (r.count == 0.0 && opaque_entries_upto(c, 0) > 0.0)) return false;

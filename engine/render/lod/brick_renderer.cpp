@@ -33,6 +33,7 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {13, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits
       {14, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits' window
       {15, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // brick records' window
+      {16, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell keys as texels
   };
 }
 
@@ -339,8 +340,12 @@ Status BrickRenderer::ensure_cell_keys() {
   // Written by a view's classify pass before its rays read them; never read elsewhere.
   classified_.assign(opt_.max_views, std::nullopt);  // a new pool's ranges, or new buffers
   if (!cell_keys_.buffer || cell_keys_.size != key_bytes) {
-    VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {key_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+    cell_key_texels_ = {};  // the view goes before its buffer
+    VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {key_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                                                              VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
                                                                gpu::MemoryIntent::kDeviceLocal, "brick cell keys"}));
+    VXR_ASSIGN_OR_RETURN(cell_key_texels_,
+                         gpu::create_buffer_view(ctx_, cell_keys_.buffer, VK_FORMAT_R32_SFLOAT, 0, key_bytes));
   }
   if (!cell_bits_.buffer || cell_bits_.size != bit_bytes) {
     VXR_ASSIGN_OR_RETURN(cell_bits_, gpu::create_buffer(ctx_, {bit_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
@@ -351,6 +356,7 @@ Status BrickRenderer::ensure_cell_keys() {
   all.push_back(mono_set_);
   for (VkDescriptorSet set : all) {
     gpu::write_storage_buffer(ctx_, set, 11, cell_keys_.buffer);
+    gpu::write_uniform_texel_buffer(ctx_, set, 16, cell_key_texels_.get());
     gpu::write_storage_buffer(ctx_, set, 13, cell_bits_.buffer);
     gpu::write_uniform_buffer(ctx_, set, 14, cell_bits_.buffer, cell_bits_window_bytes(0));
   }

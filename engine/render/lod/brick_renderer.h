@@ -359,6 +359,8 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
+  // cell_keys_ as R32F texels, which the rays' MIP / MinIP key tests read (declared after it: destroyed first).
+  gpu::Handle<VkBufferView> cell_key_texels_;
   std::vector<std::optional<CellClassInputs>> classified_;  // per view of a frame: what its pass left (none: unknown)
   CellClassInputs classify_scratch_;  // record_view fills it each view; swapped with classified_'s entry when new
   gpu::Handle<VkQueryPool> timestamps_;  // render(): two per frame; null without timestamps
