@@ -774,12 +774,15 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   } else if (mode == BrickPassMode::kTiled) {
     // The tiles a brick touches march their lists; the others only write
     // what an empty ray gives, with the variant that has no brick loop.
+    // Built with the marching variant, even while no tile is empty, so a
+    // view that later leaves tiles empty builds no pipeline mid-session.
+    VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* empty_pipe, pipeline_for(s, model, false, {}, work, true));
     dispatch_entries(spans.marched_tiles, VXR_BRICK_TILE_LISTS | VXR_BRICK_TILE_SUBSET | out_flags);
     if (spans.empty_tiles.y > 0) {
       // Other pixels of the same image, but the validation layer tracks the
       // whole image (and the cell bits the shader can write).
       compute_barrier(cmd);
-      VXR_ASSIGN_OR_RETURN(pipe, pipeline_for(s, model, false, {}, work, true));
+      pipe = empty_pipe;
       vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->pipeline);
       vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->layout, 0, 1, &set, 0, nullptr);
       dispatch_entries(spans.empty_tiles, VXR_BRICK_TILE_SUBSET | out_flags);
