@@ -353,7 +353,9 @@ struct VariantFrames {
   ImageRgba8 a, b, off;
   uint64_t a_samples = 0, b_samples = 0, off_samples = 0;
 };
-std::vector<VariantFrames> vessel_variants(BrickRendererOptions first, BrickRendererOptions second) {
+std::vector<VariantFrames> vessel_variants(BrickRendererOptions first, BrickRendererOptions second,
+                                           std::vector<OpticalModel> models = {OpticalModel::kEmissionAbsorption,
+                                                                               OpticalModel::kEmission}) {
   auto src = sparse_vessels(128);
   first.pool.slots = second.pool.slots = {8, 8, 8};
   first.pipelines = second.pipelines = std::make_shared<BrickPipelines>();
@@ -364,7 +366,7 @@ std::vector<VariantFrames> vessel_variants(BrickRendererOptions first, BrickRend
   REQUIRE((*ra)->pool().cells().cell_size == 2);
   const Camera cam = orbit_camera((*ra)->placement(), 30, 25, 1.25);
   std::vector<VariantFrames> out;
-  for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission}) {
+  for (OpticalModel model : models) {
     for (BrickPassMode mode : {BrickPassMode::kMultipass, BrickPassMode::kTiled}) {
       const RenderSettings s = vessel_settings(model);
       BrickFrameSettings f;
@@ -404,12 +406,14 @@ TEST_CASE("empty-space cells: walking 2-voxel cells or 2x2x2 groups of them give
   }
 }
 
-TEST_CASE("empty-space cells: the cell bits and brick records read through the uniform windows and the storage buffers agree") {
+TEST_CASE("empty-space cells: the cell bits, keys and brick records read through their uniform windows or texels and the storage buffers agree") {
   test::GpuTestScope scope;
   BrickRendererOptions uniform, storage;
   storage.uniform_cell_bits = false;
   storage.uniform_brick_records = false;
-  for (const VariantFrames& v : vessel_variants(uniform, storage)) {
+  storage.texel_cell_keys = false;
+  for (const VariantFrames& v : vessel_variants(
+           uniform, storage, {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip})) {
     INFO(v.what);
     CHECK(test::looks_non_blank(v.a));
     CHECK(v.a.pixels == v.b.pixels);

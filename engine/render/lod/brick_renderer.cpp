@@ -63,9 +63,10 @@ void compute_barrier(VkCommandBuffer cmd) {
   mb.srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
   mb.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
   mb.dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
-  // Uniform reads too: the rays read the classify pass's bits through a uniform window.
-  mb.dstAccessMask =
-      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_UNIFORM_READ_BIT;
+  // Uniform and sampled reads too: the rays read the classify pass's bits
+  // through a uniform window and its keys as texels.
+  mb.dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
+                     VK_ACCESS_2_UNIFORM_READ_BIT | VK_ACCESS_2_SHADER_SAMPLED_READ_BIT;
   VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
   dep.memoryBarrierCount = 1;
   dep.pMemoryBarriers = &mb;
@@ -344,8 +345,10 @@ Status BrickRenderer::ensure_cell_keys() {
     VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {key_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
                                                                               VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
                                                                gpu::MemoryIntent::kDeviceLocal, "brick cell keys"}));
-    VXR_ASSIGN_OR_RETURN(cell_key_texels_,
-                         gpu::create_buffer_view(ctx_, cell_keys_.buffer, VK_FORMAT_R32_SFLOAT, 0, key_bytes));
+    // A device with fewer texels than keys reads them from the storage buffer (UniformWindows::key_texels).
+    const uint64_t texels = std::min<uint64_t>(key_bytes / sizeof(float), ctx_.limits().maxTexelBufferElements);
+    VXR_ASSIGN_OR_RETURN(cell_key_texels_, gpu::create_buffer_view(ctx_, cell_keys_.buffer, VK_FORMAT_R32_SFLOAT, 0,
+                                                                   texels * sizeof(float)));
   }
   if (!cell_bits_.buffer || cell_bits_.size != bit_bytes) {
     VXR_ASSIGN_OR_RETURN(cell_bits_, gpu::create_buffer(ctx_, {bit_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
@@ -474,7 +477,7 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
 Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
                                                                 UniformWindows windows, SampleWork work,
                                                                 bool no_bricks) {
-  // Specialisation constants: raycast_core.glsl ids 100..105, brick_raycast.comp 106..110.
+  // Specialisation constants: raycast_core.glsl ids 100..105, brick_raycast.comp 106..111.
   const uint32_t n = channels();
   const bool gradient = s.gradient_opacity.enabled, depth = s.depth_color != DepthColorMode::kOff;
   bool gamma = false;
@@ -493,7 +496,8 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint3
   const uint32_t key = model | (n << 4) | (gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u) |
                        (gamma ? 1u << 10 : 0u) | (naive ? 1u << 11 : 0u) | (cells ? 1u << 12 : 0u) |
                        (uint32_t(work) << 13) | (windows.records ? 1u << 15 : 0u) |
-                       (windows.cell_bits ? 1u << 16 : 0u) | (no_bricks ? 1u << 17 : 0u);
+                       (windows.cell_bits ? 1u << 16 : 0u) | (no_bricks ? 1u << 17 : 0u) |
+                       (windows.key_texels ? 1u << 18 : 0u);
   std::map<uint32_t, gpu::ComputePipeline>& variants = pipes_->variants;
   if (auto it = variants.find(key); it != variants.end()) return &it->second;
   VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p,
@@ -508,7 +512,8 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint3
                                                             {107, uint32_t(work)},
                                                             {108, windows.records ? 1u : 0u},
                                                             {109, windows.cell_bits ? 1u : 0u},
-                                                            {110, no_bricks ? 1u : 0u}}}));
+                                                            {110, no_bricks ? 1u : 0u},
+                                                            {111, windows.key_texels ? 1u : 0u}}}));
   return &variants.emplace(key, std::move(p)).first->second;
 }
 
@@ -702,11 +707,13 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   const uint32_t range_cells_per_axis = pool_->cells().cells_per_axis;
   // The records, and the E-A and emission cell tests' bits, through their
   // uniform windows when all of the view's fit (bindings 15 and 14 start at
-  // the view's first).
+  // the view's first); MIP / MinIP keys as texels where the device has enough.
   UniformWindows windows;
   windows.records = opt_.uniform_brick_records && uint64_t(bricks) * sizeof(shader::BrickRecord) <= brick_window_bytes(0);
   windows.cell_bits = cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits && classify &&
                       bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes(classify->bits_offset);
+  windows.key_texels = cells_per_axis > 0 && reduce && opt_.texel_cell_keys &&
+                       cell_keys_.size / sizeof(float) <= ctx_.limits().maxTexelBufferElements;
   const gpu::ComputePipeline* pipe = nullptr;
   VXR_ASSIGN_OR_RETURN(pipe, pipeline_for(s, model, cells, windows, work));
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,

@@ -109,6 +109,10 @@ struct BrickRendererOptions {
   // view's records fit its range (680 records, or what the device allows),
   // else through a storage buffer. False: always the storage buffer.
   bool uniform_brick_records = true;
+  // MIP / MinIP cell tests read the keys as texels of a uniform texel
+  // buffer where the device holds them all, else from the storage buffer.
+  // False: always the storage buffer.
+  bool texel_cell_keys = true;
   BrickCellWalk cell_walk = BrickCellWalk::kAuto;
   // Shared with other renderers on the same context (they must outlive none
   // of its frames); null: this renderer's own.
@@ -259,12 +263,13 @@ class BrickRenderer final : public VolumeRenderer {
   Status pin_resident(uint32_t timepoint);
   void bind_atlases(VkDescriptorSet set, const std::vector<const gpu::Image*>& atlases);
   std::vector<const gpu::Image*> pool_atlases() const;
-  // Which per-ray reads go through a uniform buffer over their storage
-  // buffer (brick_raycast.comp constants 108, 109): where all of a view's
-  // fit. lavapipe runs both sides of a branch, so it is a constant.
+  // Which per-ray reads go through a uniform buffer or texel view over their
+  // storage buffer (brick_raycast.comp constants 108, 109, 111): where all of
+  // a view's fit. lavapipe runs both sides of a branch, so it is a constant.
   struct UniformWindows {
     bool records = false;    // the brick records (binding 15 over 4)
     bool cell_bits = false;  // the E-A and emission cells' emptiness bits (14 over 13)
+    bool key_texels = false;  // the MIP / MinIP cells' keys as texels (16 over 11; constant 111)
   };
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
   // features), for whether its dispatches use empty-space cells and for the
