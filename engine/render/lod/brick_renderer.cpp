@@ -366,14 +366,17 @@ Status BrickRenderer::ensure_cell_keys() {
   return Status::ok();
 }
 
+uint64_t BrickRenderer::window_bytes(uint64_t declared, const gpu::Buffer& buffer, uint64_t offset) const {
+  return std::min<uint64_t>(
+      {declared, ctx_.limits().maxUniformBufferRange, buffer.size - std::min<uint64_t>(offset, buffer.size)});
+}
+
 uint64_t BrickRenderer::cell_bits_window_bytes(uint64_t offset) const {
-  return std::min<uint64_t>({uint64_t(VXR_CELL_BITS_WINDOW_WORDS) * 4, ctx_.limits().maxUniformBufferRange,
-                             cell_bits_.size - std::min(offset, cell_bits_.size)});
+  return window_bytes(uint64_t(VXR_CELL_BITS_WINDOW_WORDS) * 4, cell_bits_, offset);
 }
 
 uint64_t BrickRenderer::brick_window_bytes(uint64_t offset) const {
-  return std::min<uint64_t>({uint64_t(VXR_BRICK_WINDOW_RECORDS) * sizeof(shader::BrickRecord),
-                             ctx_.limits().maxUniformBufferRange, table_.size - std::min(offset, table_.size)});
+  return window_bytes(uint64_t(VXR_BRICK_WINDOW_RECORDS) * sizeof(shader::BrickRecord), table_, offset);
 }
 
 uint64_t BrickRenderer::cell_bits_align() const {
@@ -994,11 +997,11 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
   // workgroups, and in row order one thread took the top of the image, the
   // other the bottom, whatever either held (MRI E-A at step 1: 69.5 ms
   // against 76.8). A row's tiles stay together.
-  const std::vector<uint32_t> rows = interleaved_rows(th);
+  if (tile_rows_.size() != th) tile_rows_ = interleaved_rows(th);
   for (bool marched : {true, false}) {
     glm::uvec2& span = marched ? spans->marched_tiles : spans->empty_tiles;
     span = glm::uvec2(next, 0);
-    for (uint32_t y : rows)
+    for (uint32_t y : tile_rows_)
       for (uint32_t x = 0; x < tw; ++x) {
         if (lists[size_t(y) * tw + x].empty() == marched) continue;
         dst[next++] = glm::uvec4(y * tw + x, x * 8, y * 8, 0);

@@ -250,6 +250,9 @@ class BrickRenderer final : public VolumeRenderer {
   // (brick_raycast.comp binding 11) and emptiness bits (13, and 14 over its
   // start); written into every descriptor set.
   Status ensure_cell_keys();
+  // A uniform window of `declared` bytes over `buffer` from `offset`: as much
+  // of it as the device's uniform range and the buffer's end allow.
+  uint64_t window_bytes(uint64_t declared, const gpu::Buffer& buffer, uint64_t offset) const;
   // The uniform window over the cell bits from `offset` (a view's region): 64 KiB or what the device allows.
   uint64_t cell_bits_window_bytes(uint64_t offset) const;
   uint64_t cell_bits_align() const;  // of a view's region: both its descriptors' offset alignments
@@ -321,9 +324,6 @@ class BrickRenderer final : public VolumeRenderer {
   // Forgets what this view's pass overwrites for the other views: their bits
   // where the regions meet, or their keys where the settings differ.
   void forget_overwritten(uint32_t view, const CellClassInputs& written);
-  // `model`: the packed parameters' VXR_MODEL_* (control.x). `classify`: the
-  // view's records, window, table and bits region (null: no cells walked);
-  // when they are new, they are swapped into the view's entry of classified_.
   // Where a view's work items are in its work list, as (first entry, count):
   // the multipass waves, or a tiled frame's tiles that some brick touches
   // and the tiles that none does (entries: tile index, x, y in pixels).
@@ -331,6 +331,9 @@ class BrickRenderer final : public VolumeRenderer {
     std::vector<glm::uvec2> waves;
     glm::uvec2 marched_tiles{0, 0}, empty_tiles{0, 0};
   };
+  // `model`: the packed parameters' VXR_MODEL_* (control.x). `classify`: the
+  // view's records, window, table and bits region (null: no cells walked);
+  // when they are new, they are swapped into the view's entry of classified_.
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
                      const WorkSpans& spans, const RenderTarget& target, CellWalk cells,
@@ -362,6 +365,7 @@ class BrickRenderer final : public VolumeRenderer {
   gpu::Image target_, float_target_, accum_;
   gpu::Image no_under_depth_, no_under_color_;  // 1x1, bound where a view has no underlay
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
+  std::vector<uint32_t> tile_rows_;  // build_tile_lists: the tile rows in dispatch order, kept while the height stays
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
   // cell_keys_ as R32F texels, which the rays' MIP / MinIP key tests read (declared after it: destroyed first).
