@@ -40,7 +40,7 @@ layout(binding = 3, rgba32f) uniform image2D accum_image;
 layout(std430, binding = 4) readonly buffer Bricks { BrickRecord bricks[]; };
 layout(std430, binding = 5) buffer Counters { uint samples_lo; uint samples_hi; };
 layout(std430, binding = 6) readonly buffer Items { uvec4 items[]; };  // x: brick, y/z: tile origin in pixels
-layout(std140, binding = 7) uniform Params { RaycastParams P; };
+layout(std140, binding = 7) uniform Params { RaycastParams view_params; };
 // Per atlas slot and channel, (min, max) texel value of each empty-space cell (BrickPool cell ranges).
 layout(std430, binding = 8) readonly buffer Cells { vec2 cell_range[]; };
 // The underlay (VXR_BRICK_UNDERLAY; engine/render/volume_renderer.h
@@ -71,7 +71,12 @@ layout(std140, binding = 14) uniform CellBitsWindow { uvec4 cell_bits_window[VXR
 // (specialisation constant 108; see brick_record).
 layout(std140, binding = 15) uniform BrickWindow { BrickRecord brick_window[VXR_BRICK_WINDOW_RECORDS]; };
 
-layout(push_constant) uniform Push { BrickCastParams p; };
+layout(push_constant) uniform Push { BrickCastParams pass_params; };
+// The two blocks' copies, made before main's first branch: in a branch or a
+// loop lavapipe (Mesa 22) reads a uniform as a gather, lane by lane behind a
+// bounds check, even at a constant offset; at the top, once, as a scalar.
+RaycastParams P;
+BrickCastParams p;
 
 // Off: no dispatch of this pipeline has empty-space cells (p.pass.y is 0), so
 // the walks and the grouped runs compile away and a frame with skipping off
@@ -405,6 +410,8 @@ float unwarp(float q, float edge, float n, float stride) {
 }
 
 void main() {
+  P = view_params;
+  p = pass_params;
   const uint flags = p.pass.z;
   if ((flags & VXR_BRICK_CLASSIFY) != 0u) {
     classify_cells();

@@ -45,6 +45,7 @@ layout(constant_id = 103) const bool VXR_SC_DEPTH_COLOR = false;  // depth.x != 
 // (unspecialised) is the general path.
 layout(constant_id = 104) const bool VXR_SC_GAMMA = true;          // some window[c].z != 1
 layout(constant_id = 105) const bool VXR_SC_NAIVE_OPACITY = true;  // control2.z != 0
+layout(constant_id = 112) const uint VXR_SC_BLEND = VXR_BLEND_ADDITIVE;  // control2.x
 
 // Table lookup with the interpolation done by the includer (two loads + mix),
 // so the CPU reference can repeat it exactly: entry i sits at x = i /
@@ -199,7 +200,7 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
     float tau = tf.a * gfac[c] * density * seg;
     if (model == VXR_MODEL_EMISSION) {
       r.acc[c].rgb += color * tau;
-    } else if (P.control2.x == VXR_BLEND_ADDITIVE) {
+    } else if (VXR_SC_BLEND == VXR_BLEND_ADDITIVE) {
       tau = vxr_segment_depth(P, tau);
       // One channel: exp(-tau so far) is what the last step's termination test computed.
       const float trans = n == 1 ? r.trans : exp(-r.tau[c]);
@@ -211,7 +212,7 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
     }
   }
   if (model == VXR_MODEL_EMISSION) return;
-  if (P.control2.x == VXR_BLEND_COMPOSITE) {
+  if (VXR_SC_BLEND == VXR_BLEND_COMPOSITE) {
     // One medium: extinctions add, emission is the extinction-weighted colour.
     const float seg_tau = vxr_segment_depth(P, mix_tau);
     if (mix_tau > 0.0) r.acc[0].rgb += exp(-r.tau.x) * vxr_opacity(seg_tau) * (mix_color / mix_tau);

@@ -254,7 +254,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   r->value_scales_.assign(r->pool_->channels(), brick_value_scale(source.info().dtype));
   const auto b = bindings();
   r->pipes_ = options.pipelines ? options.pipelines : std::make_shared<BrickPipelines>();
-  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant(VXR_MODEL_EMISSION_ABSORPTION, 1, false, false, false, false, true, {true, true}));
+  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant({.cells = true, .windows = {true, true}}));
   if (options.max_views == 0) return invalid_argument("brick renderer: max_views must be at least 1");
   VXR_ASSIGN_OR_RETURN(r->desc_pool_, gpu::create_descriptor_pool(ctx, b, options.max_views + 1));
   VXR_ASSIGN_OR_RETURN(r->mono_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_->set_layout));
@@ -480,44 +480,43 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
 Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
                                                                 UniformWindows windows, SampleWork work,
                                                                 bool no_bricks) {
-  // Specialisation constants: raycast_core.glsl ids 100..105, brick_raycast.comp 106..111.
-  const uint32_t n = channels();
-  const bool gradient = s.gradient_opacity.enabled, depth = s.depth_color != DepthColorMode::kOff;
-  bool gamma = false;
-  for (uint32_t c = 0; c < n && c < s.channels.size(); ++c) gamma = gamma || s.channels[c].gamma != 1.0;
-  const bool naive = !s.opacity_correction;
-  return variant(model, n, gradient, depth, gamma, naive, cells, windows, work, no_bricks);
+  ShaderVariant v{.model = model, .channels = channels(), .cells = cells, .windows = windows, .work = work,
+                  .no_bricks = no_bricks};
+  v.gradient = s.gradient_opacity.enabled;
+  v.depth_color = s.depth_color != DepthColorMode::kOff;
+  for (uint32_t c = 0; c < v.channels && c < s.channels.size(); ++c) v.gamma = v.gamma || s.channels[c].gamma != 1.0;
+  v.naive_opacity = !s.opacity_correction;
+  v.composite = s.blend == ChannelBlend::kComposite;
+  return variant(v);
 }
 
 static_assert(uint32_t(SampleWork::kShade) == VXR_SAMPLE_SHADE && uint32_t(SampleWork::kFetchOnly) == VXR_SAMPLE_FETCH_ONLY &&
                   uint32_t(SampleWork::kMarchOnly) == VXR_SAMPLE_MARCH_ONLY,
               "SampleWork is spec constant 107's value");
 
-Result<const gpu::ComputePipeline*> BrickRenderer::variant(uint32_t model, uint32_t n, bool gradient, bool depth,
-                                                           bool gamma, bool naive, bool cells, UniformWindows windows,
-                                                           SampleWork work, bool no_bricks) {
-  const uint32_t key = model | (n << 4) | (gradient ? 1u << 8 : 0u) | (depth ? 1u << 9 : 0u) |
-                       (gamma ? 1u << 10 : 0u) | (naive ? 1u << 11 : 0u) | (cells ? 1u << 12 : 0u) |
-                       (uint32_t(work) << 13) | (windows.records ? 1u << 15 : 0u) |
-                       (windows.cell_bits ? 1u << 16 : 0u) | (no_bricks ? 1u << 17 : 0u) |
-                       (windows.key_texels ? 1u << 18 : 0u);
-  std::map<uint32_t, gpu::ComputePipeline>& variants = pipes_->variants;
+Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& v) {
+  const std::vector<gpu::SpecializationConstant> constants = {
+      {100, v.model},
+      {101, v.channels},
+      {102, v.gradient},
+      {103, v.depth_color},
+      {104, v.gamma},
+      {105, v.naive_opacity},
+      {106, v.cells},
+      {107, uint32_t(v.work)},
+      {108, v.windows.records},
+      {109, v.windows.cell_bits},
+      {110, v.no_bricks},
+      {111, v.windows.key_texels},
+      {112, v.composite ? uint32_t(VXR_BLEND_COMPOSITE) : uint32_t(VXR_BLEND_ADDITIVE)}};
+  std::vector<uint32_t> key;  // the constants' values identify the variant
+  for (const gpu::SpecializationConstant& c : constants) key.push_back(c.value);
+  std::map<std::vector<uint32_t>, gpu::ComputePipeline>& variants = pipes_->variants;
   if (auto it = variants.find(key); it != variants.end()) return &it->second;
-  VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p,
-                       gpu::create_compute_pipeline(ctx_, {"brick_raycast.comp", bindings(), sizeof(shader::BrickCastParams),
-                                                           {{100, model},
-                                                            {101, n},
-                                                            {102, gradient ? 1u : 0u},
-                                                            {103, depth ? 1u : 0u},
-                                                            {104, gamma ? 1u : 0u},
-                                                            {105, naive ? 1u : 0u},
-                                                            {106, cells ? 1u : 0u},
-                                                            {107, uint32_t(work)},
-                                                            {108, windows.records ? 1u : 0u},
-                                                            {109, windows.cell_bits ? 1u : 0u},
-                                                            {110, no_bricks ? 1u : 0u},
-                                                            {111, windows.key_texels ? 1u : 0u}}}));
-  return &variants.emplace(key, std::move(p)).first->second;
+  VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p, gpu::create_compute_pipeline(
+                                                   ctx_, {"brick_raycast.comp", bindings(),
+                                                          sizeof(shader::BrickCastParams), constants}));
+  return &variants.emplace(std::move(key), std::move(p)).first->second;
 }
 
 std::vector<const gpu::Image*> BrickRenderer::pool_atlases() const {

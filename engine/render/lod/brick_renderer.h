@@ -71,12 +71,12 @@
 
 namespace vxr {
 
-// Compiled variants of the brick shader (keyed by model, channel count and
-// features, as BrickRenderer builds them). Renderers on one gpu::Context may
+// Compiled variants of the brick shader (keyed by their specialisation
+// constants' values, BrickRenderer::ShaderVariant). Renderers on one gpu::Context may
 // share them: lavapipe compiles each variant on the CPU, which dominates
 // creating a renderer for a small volume (tests, the stability suite).
 struct BrickPipelines {
-  std::map<uint32_t, gpu::ComputePipeline> variants;
+  std::map<std::vector<uint32_t>, gpu::ComputePipeline> variants;
 };
 
 // Which cells E-A and emission rays walk where the pool's are 2 voxels: the
@@ -274,16 +274,25 @@ class BrickRenderer final : public VolumeRenderer {
     bool cell_bits = false;  // the E-A and emission cells' emptiness bits (14 over 13)
     bool key_texels = false;  // the MIP / MinIP cells' keys as texels (16 over 11; constant 111)
   };
+  // One pipeline's specialisation constants: raycast_core.glsl ids 100..105
+  // and 112, brick_raycast.comp 106..111.
+  struct ShaderVariant {
+    uint32_t model = VXR_MODEL_EMISSION_ABSORPTION;  // VXR_MODEL_*
+    uint32_t channels = 1;
+    bool gradient = false, depth_color = false, gamma = false, naive_opacity = false;
+    bool composite = false;  // channels blend into one medium (VXR_BLEND_COMPOSITE)
+    bool cells = false;      // its dispatches may walk empty-space cells
+    UniformWindows windows;
+    SampleWork work = SampleWork::kShade;
+    bool no_bricks = false;  // no brick loop: for tiles no brick touches
+  };
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
   // features), for whether its dispatches use empty-space cells and for the
   // uniform windows it reads.
-  // `no_bricks`: the variant without the brick loop, for tiles no brick touches.
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
                                                    UniformWindows windows, SampleWork work, bool no_bricks = false);
-  // The variant for these specialisation constants, built on first use.
-  Result<const gpu::ComputePipeline*> variant(uint32_t model, uint32_t channels, bool gradient, bool depth, bool gamma,
-                                              bool naive, bool cells, UniformWindows windows,
-                                              SampleWork work = SampleWork::kShade, bool no_bricks = false);
+  // The pipeline for these constants, built on first use.
+  Result<const gpu::ComputePipeline*> variant(const ShaderVariant& v);
   // The part of brick `key` its rays march, in its local voxels: the brick
   // clipped to the ROI and, with `cells` (cell skipping on), to the box of
   // its cells that `cells` says may change a ray. Empty
