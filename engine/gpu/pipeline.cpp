@@ -214,8 +214,8 @@ void write_uniform_buffer(const Context& ctx, VkDescriptorSet set, uint32_t bind
                           VkDeviceSize size, VkDeviceSize offset) {
   write_buffer(ctx, set, binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, buffer, size, offset);
 }
-void write_uniform_texel_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBufferView view) {
-  write_descriptor(ctx, set, binding, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, nullptr, nullptr, &view);
+void write_storage_texel_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBufferView view) {
+  write_descriptor(ctx, set, binding, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, nullptr, nullptr, &view);
 }
 
 }  // namespace vxr::gpu

@@ -64,6 +64,6 @@ void write_storage_buffer(const Context& ctx, VkDescriptorSet set, uint32_t bind
                           VkDeviceSize size = VK_WHOLE_SIZE, VkDeviceSize offset = 0);
 void write_uniform_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBuffer buffer,
                           VkDeviceSize size = VK_WHOLE_SIZE, VkDeviceSize offset = 0);
-void write_uniform_texel_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBufferView view);
+void write_storage_texel_buffer(const Context& ctx, VkDescriptorSet set, uint32_t binding, VkBufferView view);
 
 }  // namespace vxr::gpu

@@ -29,11 +29,11 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {9, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},   // underlay depth
       {10, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // underlay colour
       {11, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell keys
-      {12, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // transfer rows
+      {12, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // transfer rows
       {13, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits
       {14, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits' window
       {15, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // brick records' window
-      {16, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell keys as texels
+      {16, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell keys as texels
   };
 }
 
@@ -265,14 +265,14 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->linear_, gpu::create_linear_clamp_sampler(ctx));
   // A buffer, not a texture: on lavapipe a texelFetch from an image runs the
   // sampler's code. The rays read the colour and opacity rows through a
-  // texel view (binding 12): lavapipe loads a ray's texel whole, where a
-  // storage buffer loads ray by ray with a branch each and a uniform buffer
-  // at per-ray offsets component by component (MRI E-A 3-4% faster than
-  // the uniform buffer; docs/skipping-perf.md, fifth round).
+  // storage texel view (binding 12): lavapipe loads a ray's texel whole,
+  // inline, where a storage buffer loads ray by ray with a branch each and
+  // a uniform buffer at per-ray offsets component by component
+  // (docs/skipping-perf.md, fifth and seventh rounds).
   const uint64_t tf_bytes = uint64_t(VXR_TF_SIZE) * 2 * VXR_MAX_CHANNELS * sizeof(glm::vec4);
   VXR_ASSIGN_OR_RETURN(r->transfer_buf_,
                        gpu::create_buffer(ctx, {tf_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
-                                                              VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT |
+                                                              VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
                                                               VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                                 gpu::MemoryIntent::kDeviceLocal, "transfer function"}));
   VXR_ASSIGN_OR_RETURN(r->transfer_rows_, gpu::create_buffer_view(ctx, r->transfer_buf_.buffer,
@@ -321,7 +321,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
     gpu::write_storage_buffer(ctx, set, 8, r->pool_->cell_ranges().buffer);
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
     gpu::write_storage_buffer(ctx, set, 1, r->transfer_buf_.buffer);
-    gpu::write_uniform_texel_buffer(ctx, set, 12, r->transfer_rows_.get());
+    gpu::write_storage_texel_buffer(ctx, set, 12, r->transfer_rows_.get());
   }
   gpu::write_storage_buffer(ctx, r->mono_set_, 4, r->table_.buffer);
   gpu::write_uniform_buffer(ctx, r->mono_set_, 15, r->table_.buffer, r->brick_window_bytes(0));
@@ -343,7 +343,7 @@ Status BrickRenderer::ensure_cell_keys() {
   if (!cell_keys_.buffer || cell_keys_.size != key_bytes) {
     cell_key_texels_ = {};  // the view goes before its buffer
     VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {key_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
-                                                                              VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT,
+                                                                              VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT,
                                                                gpu::MemoryIntent::kDeviceLocal, "brick cell keys"}));
     // A device with fewer texels than keys reads them from the storage buffer (UniformWindows::key_texels).
     const uint64_t texels = std::min<uint64_t>(key_bytes / sizeof(float), ctx_.limits().maxTexelBufferElements);
@@ -359,7 +359,7 @@ Status BrickRenderer::ensure_cell_keys() {
   all.push_back(mono_set_);
   for (VkDescriptorSet set : all) {
     gpu::write_storage_buffer(ctx_, set, 11, cell_keys_.buffer);
-    gpu::write_uniform_texel_buffer(ctx_, set, 16, cell_key_texels_.get());
+    gpu::write_storage_texel_buffer(ctx_, set, 16, cell_key_texels_.get());
     gpu::write_storage_buffer(ctx_, set, 13, cell_bits_.buffer);
     gpu::write_uniform_buffer(ctx_, set, 14, cell_bits_.buffer, cell_bits_window_bytes(0));
   }
