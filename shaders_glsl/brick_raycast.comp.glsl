@@ -106,6 +106,11 @@ layout(constant_id = 110) const bool VXR_SC_NO_BRICKS = false;
 // MIP / MinIP keys as texels (binding 16), where the device's texel buffers
 // hold them all: MRI MIP at step 1 65.6 ms against 69.8 from binding 11.
 layout(constant_id = 111) const bool VXR_SC_KEY_TEXELS = false;
+// Off: no dispatch of this pipeline carries rays between passes (multipass
+// waves: work items, the accumulation image's state loaded and stored), so
+// a tiled frame's invocations skip that code; lavapipe runs both sides of
+// a branch on a flag (MRI E-A at step 4: 31.0-31.7 ms against 33.2-34.9).
+layout(constant_id = 113) const bool VXR_SC_WAVES = true;
 
 // Brick b's record, read once per brick a ray enters.
 BrickRecord brick_record(uint b) {
@@ -433,7 +438,7 @@ void main() {
     pix = entry.yz + local;
   }
   uint first = p.control.z, last = p.control.z + p.control.w;
-  const bool item_mode = (flags & VXR_BRICK_WORK_ITEMS) != 0u;
+  const bool item_mode = VXR_SC_WAVES && (flags & VXR_BRICK_WORK_ITEMS) != 0u;
   if (item_mode) {
     const uvec4 item = items[p.pass.x + gl_WorkGroupID.x];
     pix = item.yz + local;
@@ -467,7 +472,7 @@ void main() {
   if (item_mode && !segment(brick_record(first), dir, t0, t1)) return;
 
   VxrRay ray = vxr_begin(P, dir);
-  if ((flags & VXR_BRICK_LOAD_ACCUM) != 0u) {
+  if (VXR_SC_WAVES && (flags & VXR_BRICK_LOAD_ACCUM) != 0u) {
     const vec4 state = imageLoad(accum_image, ivec2(pix));
     if (VXR_SC_SAMPLE_WORK == VXR_SAMPLE_SHADE) ray = unpack_ray(state);
     else g_probe = state.x;
@@ -583,7 +588,7 @@ void main() {
     if (old + total < old) atomicAdd(samples_hi, 1u);
   }
   const bool probe = VXR_SC_SAMPLE_WORK != VXR_SAMPLE_SHADE;
-  if ((flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), probe ? vec4(g_probe) : pack_ray(ray));
+  if (VXR_SC_WAVES && (flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), probe ? vec4(g_probe) : pack_ray(ray));
   if ((flags & VXR_BRICK_STORE_FINAL) != 0u) {
     vec4 c = probe ? vec4(fract(g_probe)) : finish_ray(ray);
     // The underlay under the volume (premultiplied): composite_volume_over's rule.

@@ -478,10 +478,10 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
 }
 
 Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
-                                                                UniformWindows windows, SampleWork work,
+                                                                UniformWindows windows, SampleWork work, bool waves,
                                                                 bool no_bricks) {
   ShaderVariant v{.model = model, .channels = channels(), .cells = cells, .windows = windows, .work = work,
-                  .no_bricks = no_bricks};
+                  .no_bricks = no_bricks, .waves = waves};
   v.gradient = s.gradient_opacity.enabled;
   v.depth_color = s.depth_color != DepthColorMode::kOff;
   for (uint32_t c = 0; c < v.channels && c < s.channels.size(); ++c) v.gamma = v.gamma || s.channels[c].gamma != 1.0;
@@ -508,7 +508,8 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& 
       {109, v.windows.cell_bits},
       {110, v.no_bricks},
       {111, v.windows.key_texels},
-      {112, v.composite ? uint32_t(VXR_BLEND_COMPOSITE) : uint32_t(VXR_BLEND_ADDITIVE)}};
+      {112, v.composite ? uint32_t(VXR_BLEND_COMPOSITE) : uint32_t(VXR_BLEND_ADDITIVE)},
+      {113, v.waves}};
   std::vector<uint32_t> key;  // the constants' values identify the variant
   for (const gpu::SpecializationConstant& c : constants) key.push_back(c.value);
   std::map<std::vector<uint32_t>, gpu::ComputePipeline>& variants = pipes_->variants;
@@ -717,7 +718,8 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   windows.key_texels = cells_per_axis > 0 && reduce && opt_.texel_cell_keys &&
                        cell_keys_.size / sizeof(float) <= ctx_.limits().maxTexelBufferElements;
   const gpu::ComputePipeline* pipe = nullptr;
-  VXR_ASSIGN_OR_RETURN(pipe, pipeline_for(s, model, cells, windows, work));
+  const bool waves = mode == BrickPassMode::kMultipass;
+  VXR_ASSIGN_OR_RETURN(pipe, pipeline_for(s, model, cells, windows, work, waves));
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(walk.cell_size));
   if (target.warp_x.active() || target.warp_y.active())
@@ -785,7 +787,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
     // what an empty ray gives, with the variant that has no brick loop.
     // Built with the marching variant, even while no tile is empty, so a
     // view that later leaves tiles empty builds no pipeline mid-session.
-    VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* empty_pipe, pipeline_for(s, model, false, {}, work, true));
+    VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* empty_pipe, pipeline_for(s, model, false, {}, work, false, true));
     dispatch_entries(spans.marched_tiles, VXR_BRICK_TILE_LISTS | VXR_BRICK_TILE_SUBSET | out_flags);
     if (spans.empty_tiles.y > 0) {
       // Other pixels of the same image, but the validation layer tracks the

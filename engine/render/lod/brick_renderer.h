@@ -275,7 +275,7 @@ class BrickRenderer final : public VolumeRenderer {
     bool key_texels = false;  // the MIP / MinIP cells' keys as texels (16 over 11; constant 111)
   };
   // One pipeline's specialisation constants: raycast_core.glsl ids 100..105
-  // and 112, brick_raycast.comp 106..111.
+  // and 112, brick_raycast.comp 106..111 and 113.
   struct ShaderVariant {
     uint32_t model = VXR_MODEL_EMISSION_ABSORPTION;  // VXR_MODEL_*
     uint32_t channels = 1;
@@ -285,12 +285,14 @@ class BrickRenderer final : public VolumeRenderer {
     UniformWindows windows;
     SampleWork work = SampleWork::kShade;
     bool no_bricks = false;  // no brick loop: for tiles no brick touches
+    bool waves = false;      // its dispatches carry rays between passes (BrickPassMode::kMultipass)
   };
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
-  // features), for whether its dispatches use empty-space cells and for the
-  // uniform windows it reads.
+  // features), for whether its dispatches use empty-space cells, the
+  // uniform windows it reads and whether it marches multipass waves.
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
-                                                   UniformWindows windows, SampleWork work, bool no_bricks = false);
+                                                   UniformWindows windows, SampleWork work, bool waves,
+                                                   bool no_bricks = false);
   // The pipeline for these constants, built on first use.
   Result<const gpu::ComputePipeline*> variant(const ShaderVariant& v);
   // The part of brick `key` its rays march, in its local voxels: the brick
