@@ -111,6 +111,10 @@ layout(constant_id = 111) const bool VXR_SC_KEY_TEXELS = false;
 // a tiled frame's invocations skip that code; lavapipe runs both sides of
 // a branch on a flag (MRI E-A at step 4: 31.0-31.7 ms against 33.2-34.9).
 layout(constant_id = 113) const bool VXR_SC_WAVES = true;
+// Whether this pipeline runs the VXR_BRICK_CLASSIFY pass. The pass has a
+// pipeline of its own, so the rays' pipelines carry none of its code, which
+// lavapipe would run masked in every ray's invocation.
+layout(constant_id = 114) const bool VXR_SC_CLASSIFY = true;
 
 // Brick b's record, read once per brick a ray enters.
 BrickRecord brick_record(uint b) {
@@ -421,7 +425,7 @@ void main() {
   P = view_params;
   p = pass_params;
   const uint flags = p.pass.z;
-  if ((flags & VXR_BRICK_CLASSIFY) != 0u) {
+  if (VXR_SC_CLASSIFY && (flags & VXR_BRICK_CLASSIFY) != 0u) {
     classify_cells();
     return;
   }

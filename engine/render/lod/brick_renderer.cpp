@@ -490,6 +490,12 @@ Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSett
   return variant(v);
 }
 
+Result<const gpu::ComputePipeline*> BrickRenderer::classify_pipeline(const RenderSettings& s, uint32_t model) {
+  ShaderVariant v{.model = model, .channels = channels(), .cells = true, .classify = true};
+  for (uint32_t c = 0; c < v.channels && c < s.channels.size(); ++c) v.gamma = v.gamma || s.channels[c].gamma != 1.0;
+  return variant(v);
+}
+
 static_assert(uint32_t(SampleWork::kShade) == VXR_SAMPLE_SHADE && uint32_t(SampleWork::kFetchOnly) == VXR_SAMPLE_FETCH_ONLY &&
                   uint32_t(SampleWork::kMarchOnly) == VXR_SAMPLE_MARCH_ONLY,
               "SampleWork is spec constant 107's value");
@@ -509,7 +515,8 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& 
       {110, v.no_bricks},
       {111, v.windows.key_texels},
       {112, v.composite ? uint32_t(VXR_BLEND_COMPOSITE) : uint32_t(VXR_BLEND_ADDITIVE)},
-      {113, v.waves}};
+      {113, v.waves},
+      {114, v.classify}};
   std::vector<uint32_t> key;  // the constants' values identify the variant
   for (const gpu::SpecializationConstant& c : constants) key.push_back(c.value);
   std::map<std::vector<uint32_t>, gpu::ComputePipeline>& variants = pipes_->variants;
@@ -754,6 +761,9 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   if (cells_per_axis > 0 && bricks > 0 && !classified) {
     // The cells of the view's bricks classified once, so a ray's cell test is a load and a compare.
     const uint64_t per_brick = reduce ? walk.count() : cell_bits_bytes(walk) / 4;  // keys / words
+    const gpu::ComputePipeline* classify_pipe = nullptr;
+    VXR_ASSIGN_OR_RETURN(classify_pipe, classify_pipeline(s, model));
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, classify_pipe->pipeline);
     p.control = glm::uvec4(0, 0, 0, bricks);
     p.pass = glm::uvec4(0, cells_per_axis, VXR_BRICK_CLASSIFY, range_cells_per_axis);
     vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
@@ -761,6 +771,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
     ++dispatches;
     if (stats) ++stats->classify_passes;
     compute_barrier(cmd);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe->pipeline);
   }
   auto dispatch = [&](uint32_t first, uint32_t count, uint32_t flags) {
     p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), first, count);

@@ -275,7 +275,7 @@ class BrickRenderer final : public VolumeRenderer {
     bool key_texels = false;  // the MIP / MinIP cells' keys as texels (16 over 11; constant 111)
   };
   // One pipeline's specialisation constants: raycast_core.glsl ids 100..105
-  // and 112, brick_raycast.comp 106..111 and 113.
+  // and 112, brick_raycast.comp 106..111, 113 and 114.
   struct ShaderVariant {
     uint32_t model = VXR_MODEL_EMISSION_ABSORPTION;  // VXR_MODEL_*
     uint32_t channels = 1;
@@ -286,6 +286,7 @@ class BrickRenderer final : public VolumeRenderer {
     SampleWork work = SampleWork::kShade;
     bool no_bricks = false;  // no brick loop: for tiles no brick touches
     bool waves = false;      // its dispatches carry rays between passes (BrickPassMode::kMultipass)
+    bool classify = false;   // the cell classification pass's pipeline (no other dispatch carries its code)
   };
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
   // features), for whether its dispatches use empty-space cells, the
@@ -293,6 +294,8 @@ class BrickRenderer final : public VolumeRenderer {
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
                                                    UniformWindows windows, SampleWork work, bool waves,
                                                    bool no_bricks = false);
+  // The classification pass's pipeline: only what classify_cells reads is specialised.
+  Result<const gpu::ComputePipeline*> classify_pipeline(const RenderSettings& s, uint32_t model);
   // The pipeline for these constants, built on first use.
   Result<const gpu::ComputePipeline*> variant(const ShaderVariant& v);
   // The part of brick `key` its rays march, in its local voxels: the brick
