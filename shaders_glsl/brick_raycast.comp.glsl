@@ -109,7 +109,7 @@ layout(constant_id = 111) const bool VXR_SC_KEY_TEXELS = false;
 // Off: no dispatch of this pipeline carries rays between passes (multipass
 // waves: work items, the accumulation image's state loaded and stored), so
 // a tiled frame's invocations skip that code; lavapipe runs both sides of
-// a branch on a flag (MRI E-A at step 4: 31.0-31.7 ms against 33.2-34.9).
+// a branch on a flag (MRI E-A at step 4: 31.7-33.1 ms against 33.2-34.4).
 layout(constant_id = 113) const bool VXR_SC_WAVES = true;
 // Whether this pipeline runs the VXR_BRICK_CLASSIFY pass. The pass has a
 // pipeline of its own, so the rays' pipelines carry none of its code, which
