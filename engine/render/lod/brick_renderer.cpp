@@ -477,6 +477,15 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
   return Status::ok();
 }
 
+namespace {
+// Some drawn channel has a gamma other than 1 (constant 104).
+bool any_gamma(const RenderSettings& s, uint32_t channels) {
+  for (uint32_t c = 0; c < channels && c < s.channels.size(); ++c)
+    if (s.channels[c].gamma != 1.0) return true;
+  return false;
+}
+}  // namespace
+
 Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
                                                                 UniformWindows windows, SampleWork work, bool waves,
                                                                 bool no_bricks) {
@@ -484,7 +493,7 @@ Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSett
                   .no_bricks = no_bricks, .waves = waves};
   v.gradient = s.gradient_opacity.enabled;
   v.depth_color = s.depth_color != DepthColorMode::kOff;
-  for (uint32_t c = 0; c < v.channels && c < s.channels.size(); ++c) v.gamma = v.gamma || s.channels[c].gamma != 1.0;
+  v.gamma = any_gamma(s, v.channels);
   v.naive_opacity = !s.opacity_correction;
   v.composite = s.blend == ChannelBlend::kComposite;
   return variant(v);
@@ -492,7 +501,7 @@ Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSett
 
 Result<const gpu::ComputePipeline*> BrickRenderer::classify_pipeline(const RenderSettings& s, uint32_t model) {
   ShaderVariant v{.model = model, .channels = channels(), .cells = true, .classify = true};
-  for (uint32_t c = 0; c < v.channels && c < s.channels.size(); ++c) v.gamma = v.gamma || s.channels[c].gamma != 1.0;
+  v.gamma = any_gamma(s, v.channels);
   return variant(v);
 }
 
@@ -501,7 +510,8 @@ static_assert(uint32_t(SampleWork::kShade) == VXR_SAMPLE_SHADE && uint32_t(Sampl
               "SampleWork is spec constant 107's value");
 
 Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& v) {
-  const std::vector<gpu::SpecializationConstant> constants = {
+  // Looked up every view of every frame: a fixed-size key, the vector only for a build.
+  const std::array<gpu::SpecializationConstant, kVariantConstants> constants = {{
       {100, v.model},
       {101, v.channels},
       {102, v.gradient},
@@ -516,15 +526,16 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& 
       {111, v.windows.key_texels},
       {112, v.composite ? uint32_t(VXR_BLEND_COMPOSITE) : uint32_t(VXR_BLEND_ADDITIVE)},
       {113, v.waves},
-      {114, v.classify}};
-  std::vector<uint32_t> key;  // the constants' values identify the variant
-  for (const gpu::SpecializationConstant& c : constants) key.push_back(c.value);
-  std::map<std::vector<uint32_t>, gpu::ComputePipeline>& variants = pipes_->variants;
+      {114, v.classify}}};
+  VariantKey key;  // the constants' values identify the variant
+  for (size_t i = 0; i < constants.size(); ++i) key[i] = constants[i].value;
+  std::map<VariantKey, gpu::ComputePipeline>& variants = pipes_->variants;
   if (auto it = variants.find(key); it != variants.end()) return &it->second;
-  VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p, gpu::create_compute_pipeline(
-                                                   ctx_, {"brick_raycast.comp", bindings(),
-                                                          sizeof(shader::BrickCastParams), constants}));
-  return &variants.emplace(std::move(key), std::move(p)).first->second;
+  VXR_ASSIGN_OR_RETURN(gpu::ComputePipeline p,
+                       gpu::create_compute_pipeline(ctx_, {"brick_raycast.comp", bindings(),
+                                                           sizeof(shader::BrickCastParams),
+                                                           {constants.begin(), constants.end()}}));
+  return &variants.emplace(key, std::move(p)).first->second;
 }
 
 std::vector<const gpu::Image*> BrickRenderer::pool_atlases() const {
@@ -766,7 +777,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, classify_pipe->pipeline);
     p.control = glm::uvec4(0, 0, 0, bricks);
     p.pass = glm::uvec4(0, cells_per_axis, VXR_BRICK_CLASSIFY, range_cells_per_axis);
-    vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+    vkCmdPushConstants(cmd, classify_pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
     vkCmdDispatch(cmd, bricks, uint32_t((per_brick + 63) / 64), 1);
     ++dispatches;
     if (stats) ++stats->classify_passes;

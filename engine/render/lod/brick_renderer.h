@@ -75,8 +75,10 @@ namespace vxr {
 // constants' values, BrickRenderer::ShaderVariant). Renderers on one gpu::Context may
 // share them: lavapipe compiles each variant on the CPU, which dominates
 // creating a renderer for a small volume (tests, the stability suite).
+inline constexpr size_t kVariantConstants = 15;  // brick_raycast.comp's ids 100..114
+using VariantKey = std::array<uint32_t, kVariantConstants>;
 struct BrickPipelines {
-  std::map<std::vector<uint32_t>, gpu::ComputePipeline> variants;
+  std::map<VariantKey, gpu::ComputePipeline> variants;
 };
 
 // Which cells E-A and emission rays walk where the pool's are 2 voxels: the
