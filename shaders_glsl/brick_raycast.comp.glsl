@@ -504,8 +504,9 @@ void main() {
     const float dt = P.march.x / length(dl);  // one local step, in t units
     const float i0 = ceil(t0 / dt - offset);
     const int n = int(ceil(t1 / dt - offset) - i0);
-    // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture).
-    const bool cells = VXR_SC_CELLS && p.pass.y != 0u && br.atlas.w >= 0.0;
+    // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture),
+    // unless no cell of its box is empty (box_lo.w): then a walk finds nothing.
+    const bool cells = VXR_SC_CELLS && p.pass.y != 0u && br.atlas.w >= 0.0 && br.box_lo.w == 0.0;
     const uint cell_base = !cells ? 0u
                            : kReduceModel ? uint(br.atlas.w) * uint(VXR_SC_CHANNELS) * cell_count()
                                           : b * cell_words();

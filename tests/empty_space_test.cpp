@@ -257,6 +257,70 @@ TEST_CASE("empty-space cells: a cell whose range reaches one table entry into th
   }
 }
 
+TEST_CASE("empty-space cells: a brick that keeps every cell is marched without a walk, with the same image") {
+  // The ball again, in 16-voxel bricks: the eight around the centre hold
+  // values of at least 19 / 255, the outer ones reach the empty corners.
+  test::GpuTestScope scope;
+  DenseVolume ball;
+  ball.dims = {64, 64, 64};
+  ball.data.resize(ball.voxel_count());
+  size_t i = 0;
+  for (uint32_t z = 0; z < 64; ++z)
+    for (uint32_t y = 0; y < 64; ++y)
+      for (uint32_t x = 0; x < 64; ++x, ++i) {
+        const double r = std::sqrt((x - 31.5) * (x - 31.5) + (y - 31.5) * (y - 31.5) + (z - 31.5) * (z - 31.5));
+        ball.data[i] = static_cast<uint8_t>(std::clamp(255.0 * (1.0 - r / 30.0), 0.0, 255.0));
+      }
+  auto src = DenseChunkSource::create({ball}, 16, 2);
+  REQUIRE(src.is_ok());
+  auto made = BrickRenderer::create(test::gpu_context(), **src, {});
+  REQUIRE(made.is_ok());
+  BrickRenderer& r = **made;
+  const Camera cam = orbit_camera(r.placement(), 30, 25, 1.3);
+  struct Case {
+    const char* what;
+    OpticalModel model;
+    std::vector<OpacityPoint> opacity;
+    int walked;  // -1: some bricks but not all; else how many
+  };
+  const Case cases[] = {
+      {"every voxel visible: no brick walks", OpticalModel::kEmissionAbsorption, {{0.0, 0.1}, {1.0, 1.0}}, 0},
+      {"visible from 0.05: the outer bricks walk", OpticalModel::kEmissionAbsorption, {{0.0, 0.0}, {0.05, 0.0}, {0.06, 1.0}, {1.0, 1.0}}, -1},
+      {"MIP: every brick walks", OpticalModel::kMip, {{0.0, 0.1}, {1.0, 1.0}}, 64},
+  };
+  for (const Case& c : cases) {
+    RenderSettings s;
+    s.model = c.model;
+    s.channels[0].colormap = "magma";
+    s.channels[0].window_lo = 0;
+    s.channels[0].window_hi = 255;
+    s.channels[0].opacity_points = c.opacity;
+    s.step_voxels = 0.5;
+    s.density = 0.05;
+    BrickFrameSettings f;
+    f.lod.force_level = 0;
+    BrickFrameStats on, off;
+    const ImageRgba8 a = converge(r, cam, s, f, 72, 72, &on);
+    f.lod.skip_empty = false;
+    const ImageRgba8 b = converge(r, cam, s, f, 72, 72, &off);
+    INFO(c.what << ": walked " << on.bricks_walked << " of " << on.lod.drawn << ", samples " << on.samples << " vs "
+                << off.samples);
+    REQUIRE(on.lod.drawn == 64);
+    CHECK(test::looks_non_blank(a));
+    CHECK(a.pixels == b.pixels);
+    CHECK(off.bricks_walked == 0);
+    if (c.walked >= 0) {
+      CHECK(on.bricks_walked == uint32_t(c.walked));
+    } else {
+      CHECK(on.bricks_walked > 0);
+      CHECK(on.bricks_walked < on.lod.drawn);
+      CHECK(on.samples < off.samples);
+    }
+    if (c.walked == 0) CHECK(on.samples == off.samples);
+    MESSAGE(c.what << ": walked " << on.bricks_walked << " of " << on.lod.drawn);
+  }
+}
+
 TEST_CASE("empty-space cells: images with skipping on and off are bit-identical for every model that skips") {
   test::GpuTestScope scope;
   auto src = sparse_vessels(128);

@@ -67,6 +67,7 @@ struct BrickFrameStats {
   double hit_rate = 1.0;         // wanted bricks already resident / wanted bricks
   uint32_t dispatches = 0;
   uint32_t classify_passes = 0;  // of those, cell classifications (none where a view's inputs did not change)
+  uint32_t bricks_walked = 0;    // drawn bricks whose rays walk empty-space cells (the others keep every cell)
   double traverse_ms = 0.0;      // CPU octree traversal
   double render_ms = 0.0;        // ray-cast submission, wall clock
   double gpu_ms = 0.0;           // BrickRenderer::render: the frame's commands on the GPU (timestamps; 0: none)

@@ -55,7 +55,8 @@ using uvec4 = glm::uvec4;
 struct BrickRecord {
   vec4 eye;     // xyz: eye position in local voxels
   vec4 scale;   // xyz: local voxels per level-0 voxel along each axis (1 / downsample)
-  vec4 box_lo;  // xyz: where marching starts being allowed (0, or the ROI), local voxels
+  vec4 box_lo;  // xyz: where marching starts being allowed (0, or the ROI), local voxels;
+                // w: 1 where every cell in the box is kept, so its rays march without a cell walk
   vec4 box_hi;  // xyz: the brick's extent clipped to the volume and the ROI
   vec4 atlas;   // xyz: atlas texel coordinate of the local origin; w: atlas slot (cell ranges), < 0: none
   vec4 plane;   // cut plane in local voxels: keep dot(xyz, p) + w >= 0; xyz = 0: none

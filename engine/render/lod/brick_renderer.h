@@ -304,15 +304,18 @@ class BrickRenderer final : public VolumeRenderer {
   // clipped to the ROI and, with `cells` (cell skipping on), to the box of
   // its cells that `cells` says may change a ray. Empty
   // (lo >= hi on an axis) when no cell may.
-  // Adds to `walk_split` the empty cells in 2x2x2 groups that keep some cell
-  // (what walking cells instead of groups could skip), to `walk_groups` the
-  // groups meeting the box of kept cells (what a walk may cross).
+  // With `cells`, `facts` (if given) says what a walk through them would meet.
+  struct CellFacts {
+    uint32_t split = 0;         // empty cells in 2x2x2 groups that keep some cell (what walking cells instead of groups could skip)
+    uint32_t boxed_groups = 0;  // groups meeting the box of kept cells (what a walk may cross)
+    bool all_kept = false;      // every cell in the box is kept: a walk would find no empty cell
+  };
   BrickBox march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells,
-                     uint64_t* walk_split = nullptr, uint64_t* walk_groups = nullptr);
+                     CellFacts* facts = nullptr);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in
-  // texels; `box`: march_box, local voxels).
+  // texels; `box`: march_box, local voxels; `walk`: its rays walk cells).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
-                   const LodSettings& clip, const BrickBox& box) const;
+                   const LodSettings& clip, const BrickBox& box, bool walk) const;
   // Records one view's dispatches with `set` and writes the result into `target`.
   // Which empty-space cells the rays walk: none, the pool's (BrickCells), or
   // groups of 2x2x2 of them where the pool's are smaller than 4 voxels
@@ -412,7 +415,7 @@ class BrickRenderer final : public VolumeRenderer {
     ChunkKey key;
     uint64_t settings = 0;  // 0: not computed
     glm::uvec3 lo{0}, hi{0};
-    uint32_t split = 0, boxed_groups = 0;  // march_box's walk_split, walk_groups for this brick
+    CellFacts facts;
   };
   std::vector<OccupiedCells> occupied_;
   std::vector<uint8_t> kept_scratch_;  // march_box: which cells a brick keeps
