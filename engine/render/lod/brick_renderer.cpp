@@ -730,6 +730,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   const bool cells = cell_walk != CellWalk::kOff && (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION ||
                                     (reduce && walk.cell_size >= 2.0 * s.step_voxels));
   const uint32_t cells_per_axis = cells ? walk.cells_per_axis : 0u;
+  if (!cells && stats) stats->bricks_walked = 0;  // record_view counted the bricks that would walk
   const uint32_t range_cells_per_axis = pool_->cells().cells_per_axis;
   // The records, and the E-A and emission cell tests' bits, through their
   // uniform windows when all of the view's fit (bindings 15 and 14 start at
