@@ -39,6 +39,21 @@ std::unique_ptr<BrickRenderer> small_pool_renderer(const ChunkSource& src, Brick
   return std::move(made).value();
 }
 
+// A smooth 64^3 ball: the value falls linearly from 255 at the centre to 0 at radius 30.
+DenseVolume linear_ball() {
+  DenseVolume ball;
+  ball.dims = {64, 64, 64};
+  ball.data.resize(ball.voxel_count());
+  size_t i = 0;
+  for (uint32_t z = 0; z < 64; ++z)
+    for (uint32_t y = 0; y < 64; ++y)
+      for (uint32_t x = 0; x < 64; ++x, ++i) {
+        const double r = std::sqrt((x - 31.5) * (x - 31.5) + (y - 31.5) * (y - 31.5) + (z - 31.5) * (z - 31.5));
+        ball.data[i] = static_cast<uint8_t>(std::clamp(255.0 * (1.0 - r / 30.0), 0.0, 255.0));
+      }
+  return ball;
+}
+
 // The vessels' settings for the on/off identity tests: step 0.5, hot, dense enough to terminate rays.
 RenderSettings vessel_settings(OpticalModel model) {
   RenderSettings s;
@@ -219,17 +234,7 @@ TEST_CASE("empty-space cells: a cell whose range reaches one table entry into th
   // function at every distance from it. Skipping one that reaches a single
   // opaque entry would drop samples of opacity 1: the images would differ.
   test::GpuTestScope scope;
-  DenseVolume ball;
-  ball.dims = {64, 64, 64};
-  ball.data.resize(ball.voxel_count());
-  size_t i = 0;
-  for (uint32_t z = 0; z < 64; ++z)
-    for (uint32_t y = 0; y < 64; ++y)
-      for (uint32_t x = 0; x < 64; ++x, ++i) {
-        const double r = std::sqrt((x - 31.5) * (x - 31.5) + (y - 31.5) * (y - 31.5) + (z - 31.5) * (z - 31.5));
-        ball.data[i] = static_cast<uint8_t>(std::clamp(255.0 * (1.0 - r / 30.0), 0.0, 255.0));
-      }
-  auto src = DenseChunkSource::create({ball}, 32, 2);
+  auto src = DenseChunkSource::create({linear_ball()}, 32, 2);
   REQUIRE(src.is_ok());
   auto made = BrickRenderer::create(test::gpu_context(), **src, {});
   REQUIRE(made.is_ok());
@@ -258,20 +263,10 @@ TEST_CASE("empty-space cells: a cell whose range reaches one table entry into th
 }
 
 TEST_CASE("empty-space cells: a brick that keeps every cell is marched without a walk, with the same image") {
-  // The ball again, in 16-voxel bricks: the eight around the centre hold
-  // values of at least 19 / 255, the outer ones reach the empty corners.
+  // The ball in 16-voxel bricks: the eight around the centre hold values
+  // of at least 27 / 255, the outer ones reach the empty corners.
   test::GpuTestScope scope;
-  DenseVolume ball;
-  ball.dims = {64, 64, 64};
-  ball.data.resize(ball.voxel_count());
-  size_t i = 0;
-  for (uint32_t z = 0; z < 64; ++z)
-    for (uint32_t y = 0; y < 64; ++y)
-      for (uint32_t x = 0; x < 64; ++x, ++i) {
-        const double r = std::sqrt((x - 31.5) * (x - 31.5) + (y - 31.5) * (y - 31.5) + (z - 31.5) * (z - 31.5));
-        ball.data[i] = static_cast<uint8_t>(std::clamp(255.0 * (1.0 - r / 30.0), 0.0, 255.0));
-      }
-  auto src = DenseChunkSource::create({ball}, 16, 2);
+  auto src = DenseChunkSource::create({linear_ball()}, 16, 2);
   REQUIRE(src.is_ok());
   auto made = BrickRenderer::create(test::gpu_context(), **src, {});
   REQUIRE(made.is_ok());
