@@ -1220,9 +1220,9 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   // samples of the empty cells in groups it would march (cell size / step
   // each), the groups take one walk step per group crossed instead of about
   // two, weighed alike (the DDA walk costs about a third of a sample a cell;
-  // the weights date from the walk before it). The MRI and the sparse
-  // vessels walk cells (`vxr bench peer`), a dense volume groups (`vxr bench
-  // roofline`).
+  // the weights date from the walk before it). The MRI walks cells up to
+  // step 2, the sparse vessels up to step 1 (`vxr bench peer`); a dense
+  // volume's bricks keep every cell and do not walk (`vxr bench roofline`).
   CellWalk walk = CellWalk::kOff;
   CellClassInputs& classify = classify_scratch_;  // reused: no allocation per frame once sizes settle
   if (skip_cells) {
