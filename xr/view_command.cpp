@@ -46,9 +46,10 @@ std::array<double, 2> slider_range(const VolumeInfo& info, const RenderSettings&
 // --movie: a scratch folder for the frames, beside the movie ("<dir>/.<name>.frames.XXXXXX").
 Result<std::string> movie_scratch_dir(const std::string& movie) {
   const std::filesystem::path out(movie);
-  std::string templ = ((out.has_parent_path() ? out.parent_path() : std::filesystem::path(".")) /
-                       ("." + out.filename().string() + ".frames.XXXXXX"))
-                          .string();
+  std::string name = ".";  // appended, not "." + string: GCC 12 warns falsely (-Wrestrict) on that
+  name += out.filename().string();
+  name += ".frames.XXXXXX";
+  std::string templ = ((out.has_parent_path() ? out.parent_path() : std::filesystem::path(".")) / name).string();
   if (!::mkdtemp(templ.data())) return io_error(movie + ": cannot create a scratch folder for the frames beside it");
   return templ;
 }
@@ -173,7 +174,10 @@ Status ViewCommand::open_session() {
   const VolumeInfo& info = session_->source->info();
   if (info.channels > 1 || info.timepoints > 1) {
     std::string shown;
-    for (uint32_t c : session_->channels) shown += (shown.empty() ? "" : ",") + std::to_string(c);
+    for (uint32_t c : session_->channels) {
+      if (!shown.empty()) shown += ',';
+      shown += std::to_string(c);
+    }
     report_.note(o_.input + ": showing channel(s) " + shown + " of timepoint " + std::to_string(session_->timepoint) +
                  " (of " + std::to_string(info.channels) + " channels, " + std::to_string(info.timepoints) +
                  " timepoints)");
