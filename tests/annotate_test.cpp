@@ -736,7 +736,7 @@ TEST_CASE("store: killed with SIGKILL at 60 random moments, every acknowledged w
         auto m = (*s)->marker(a.a);
         REQUIRE_MESSAGE(m.is_ok(), "acknowledged marker " << a.a << " lost: " << m.status().message());
         CHECK(m->pos == Vec3{d, 2 * d, 3 * d});
-        CHECK(m->cls == "c" + std::to_string(a.seq % 4));
+        CHECK(m->cls == std::string("c").append(std::to_string(a.seq % 4)));
       } else if (a.kind == 'n') {
         auto sk = (*s)->skeleton(a.a);
         REQUIRE_MESSAGE(sk.is_ok(), sk.status().message());

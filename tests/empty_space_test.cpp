@@ -280,7 +280,8 @@ TEST_CASE("empty-space cells: a brick that keeps every cell is marched without a
   };
   const Case cases[] = {
       {"every voxel visible: no brick walks", OpticalModel::kEmissionAbsorption, {{0.0, 0.1}, {1.0, 1.0}}, 0},
-      {"visible from 0.05: the outer bricks walk", OpticalModel::kEmissionAbsorption, {{0.0, 0.0}, {0.05, 0.0}, {0.06, 1.0}, {1.0, 1.0}}, -1},
+      {"visible from 0.05: the outer bricks walk", OpticalModel::kEmissionAbsorption,
+       {{0.0, 0.0}, {0.05, 0.0}, {0.06, 1.0}, {1.0, 1.0}}, -1},
       {"MIP: every brick walks", OpticalModel::kMip, {{0.0, 0.1}, {1.0, 1.0}}, 64},
       {"MIP at a step of over half a cell: no cell walk at all", OpticalModel::kMip, {{0.0, 0.1}, {1.0, 1.0}}, 0},
   };
@@ -299,8 +300,8 @@ TEST_CASE("empty-space cells: a brick that keeps every cell is marched without a
     const ImageRgba8 a = converge(r, cam, s, f, 72, 72, &on);
     f.lod.skip_empty = false;
     const ImageRgba8 b = converge(r, cam, s, f, 72, 72, &off);
-    INFO(std::string(c.what) << ": walked " << on.bricks_walked << " of " << on.lod.drawn << ", samples " << on.samples << " vs "
-                << off.samples);
+    INFO(std::string(c.what) << ": walked " << on.bricks_walked << " of " << on.lod.drawn << ", samples "
+                             << on.samples << " vs " << off.samples);
     REQUIRE(on.lod.drawn == 64);
     CHECK(test::looks_non_blank(a));
     CHECK(a.pixels == b.pixels);

@@ -1,7 +1,5 @@
 #include "xr/view_command.h"
 
-#include <stdlib.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -41,17 +39,6 @@ std::array<double, 2> slider_range(const VolumeInfo& info, const RenderSettings&
   }
   const double pad = hi - lo;
   return {lo - pad, hi + pad};
-}
-
-// --movie: a scratch folder for the frames, beside the movie ("<dir>/.<name>.frames.XXXXXX").
-Result<std::string> movie_scratch_dir(const std::string& movie) {
-  const std::filesystem::path out(movie);
-  std::string name = ".";  // appended, not "." + string: GCC 12 warns falsely (-Wrestrict) on that
-  name += out.filename().string();
-  name += ".frames.XXXXXX";
-  std::string templ = ((out.has_parent_path() ? out.parent_path() : std::filesystem::path(".")) / name).string();
-  if (!::mkdtemp(templ.data())) return io_error(movie + ": cannot create a scratch folder for the frames beside it");
-  return templ;
 }
 
 bool is_usage_code(const Status& s) {

@@ -1,7 +1,5 @@
 #include "xr/desktop/viewer_movie.h"
 
-#include <stdlib.h>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -64,12 +62,7 @@ Result<MovieExport> MovieExport::start(const MovieRequest& request, const std::v
   }
   std::error_code ec;
   if (is_mp4(request.output)) {
-    const std::filesystem::path out(request.output);
-    std::string templ = ((out.has_parent_path() ? out.parent_path() : std::filesystem::path(".")) /
-                         ("." + out.filename().string() + ".frames.XXXXXX"))
-                            .string();
-    if (!::mkdtemp(templ.data())) return io_error(request.output + ": cannot create a scratch folder for the frames beside it");
-    m.frame_dir_ = templ;
+    VXR_ASSIGN_OR_RETURN(m.frame_dir_, movie_scratch_dir(request.output));
   } else {
     std::filesystem::create_directories(request.output, ec);
     if (ec) return io_error(request.output + ": cannot create the folder for the frames (" + ec.message() + ")");

@@ -214,7 +214,8 @@ void read_store(ViewerTools& tools, ToolPanel& panel, uint32_t timepoint) {
   panel.counts = *counts;
   panel.lengths.clear();
   for (const annotate::Measurement& m : *measurements)
-    panel.lengths.emplace_back(m.label.empty() ? "#" + std::to_string(m.id) : m.label, store.length(m));
+    panel.lengths.emplace_back(m.label.empty() ? std::string("#").append(std::to_string(m.id)) : m.label,
+                               store.length(m));
   panel.cards = *cards;
   panel.status = *status;
   panel.rows = *rows;
@@ -268,8 +269,9 @@ void live_tool(ViewerTools& tools, ToolPanel& panel) {
   }
   if (panel.mode == ToolPanel::Mode::kRoi && st.roi) {
     const annotate::Roi& r = *st.roi;
-    ImGui::Text("box%s (%.1f, %.1f, %.1f) - (%.1f, %.1f, %.1f)", r.id ? (" " + std::to_string(r.id)).c_str() : "",
-                r.min[0], r.min[1], r.min[2], r.max[0], r.max[1], r.max[2]);
+    const std::string id = r.id ? std::string(" ").append(std::to_string(r.id)) : std::string();
+    ImGui::Text("box%s (%.1f, %.1f, %.1f) - (%.1f, %.1f, %.1f)", id.c_str(), r.min[0], r.min[1], r.min[2], r.max[0],
+                r.max[1], r.max[2]);
     ImGui::Text("%zu marker(s) inside at this timepoint", st.roi_markers);
   }
   if (panel.mode == ToolPanel::Mode::kTrace || panel.mode == ToolPanel::Mode::kTrack) {

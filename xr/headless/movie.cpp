@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
-#include <cstdlib>
+#include <cstdlib>  // mkdtemp, getenv
 #include <filesystem>
 #include <vector>
 
@@ -30,6 +30,16 @@ std::string find_ffmpeg() {
     start = end + 1;
   }
   return {};
+}
+
+Result<std::string> movie_scratch_dir(const std::string& movie) {
+  const fs::path out(movie);
+  std::string name = ".";  // appended, not "." + string: GCC 12 warns falsely (-Wrestrict) on that
+  name += out.filename().string();
+  name += ".frames.XXXXXX";
+  std::string templ = ((out.has_parent_path() ? out.parent_path() : fs::path(".")) / name).string();
+  if (!::mkdtemp(templ.data())) return io_error(movie + ": cannot create a scratch folder for the frames beside it");
+  return templ;
 }
 
 Status encode_movie(const std::string& png_dir, double fps, const std::string& output) {

@@ -14,6 +14,10 @@ namespace vxr::xr {
 // The ffmpeg executable: $VXR_FFMPEG, else `ffmpeg` on PATH; empty when none.
 std::string find_ffmpeg();
 
+// A new scratch folder for the frames of movie `movie`, beside it
+// ("<dir>/.<name>.frames.XXXXXX"), so the frames land on the movie's disk.
+Result<std::string> movie_scratch_dir(const std::string& movie);
+
 // Encodes every *.png in `png_dir` (sorted by name; gaps in the numbering are
 // fine) at `fps` frames per second into `output` (.mp4), through a temp file
 // beside it renamed into place when ffmpeg succeeds. Errors name the file and
