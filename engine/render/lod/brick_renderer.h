@@ -306,7 +306,8 @@ class BrickRenderer final : public VolumeRenderer {
   // (lo >= hi on an axis) when no cell may.
   // With `cells`, `facts` (if given) says what a walk through them would meet.
   struct CellFacts {
-    uint32_t split = 0;         // empty cells in 2x2x2 groups that keep some cell (what walking cells instead of groups could skip)
+    // Empty cells in 2x2x2 groups that keep some cell: what walking cells instead of groups could skip.
+    uint32_t split = 0;
     uint32_t boxed_groups = 0;  // groups meeting the box of kept cells (what a walk may cross)
     bool all_kept = false;      // every cell in the box is kept: a walk would find no empty cell
   };
