@@ -74,6 +74,11 @@ layout(std140, binding = 14) uniform CellBitsWindow { uvec4 cell_bits_window[VXR
 // (specialisation constant 108; see brick_record).
 layout(std140, binding = 15) uniform BrickWindow { BrickRecord brick_window[VXR_BRICK_WINDOW_RECORDS]; };
 
+// Each atlas's texels as 16-bit elements (BrickPool texel views) for the
+// rays' own trilinear filter (specialisation constant 115); without views,
+// and past the channel count, a stand-in that is never read.
+layout(binding = 17, r16ui) uniform readonly uimageBuffer atlas_texels[VXR_MAX_CHANNELS];
+
 layout(push_constant) uniform Push { BrickCastParams pass_params; };
 // The two blocks' copies, made before main's first branch: in a branch or a
 // loop lavapipe (Mesa 22) reads a uniform as a gather, lane by lane behind a
@@ -116,6 +121,13 @@ layout(constant_id = 113) const bool VXR_SC_WAVES = true;
 // lavapipe would run masked in every ray's invocation.
 layout(constant_id = 114) const bool VXR_SC_CLASSIFY = true;
 
+// 0: the rays sample the atlases (binding 0). 1 or 2: the atlas texels'
+// bytes (R8 or R16 UNORM), and the rays filter their texel views (binding
+// 17) by hand: on lavapipe each sampler call is a function call costing
+// several times the loads and arithmetic of the filter below
+// (docs/skipping-perf.md, tenth round).
+layout(constant_id = 115) const uint VXR_SC_TEXEL_BYTES = 0u;
+
 // Brick b's record, read once per brick a ray enters.
 BrickRecord brick_record(uint b) {
   if (VXR_SC_RECORDS_UNIFORM) return brick_window[b];  // (a ?: of the two block types is not valid SPIR-V)
@@ -136,11 +148,62 @@ float g_t_limit = 1.0 / 0.0;
 // A probe's sum (VXR_SC_SAMPLE_WORK): stored as the pixel, so its work is kept.
 float g_probe = 0.0;
 
+// Where the sampler's linear filter with clamp-to-edge reads for atlas
+// texel coordinate `a` (texel centres at + 0.5): the 8 texels' indices in
+// the texel view (along rows, then slices) and the weights.
+struct AtlasCorners {
+  int t000, t100, t010, t110, t001, t101, t011, t111;
+  vec3 f;
+};
+
+AtlasCorners atlas_corners(vec3 a) {
+  const vec3 lo = floor(a - 0.5);
+  const ivec3 last = ivec3(p.texels.z & 0xffffu, p.texels.z >> 16u, p.texels.w);
+  const ivec3 i0 = clamp(ivec3(lo), ivec3(0), last), i1 = clamp(ivec3(lo) + 1, ivec3(0), last);
+  const int row = int(p.texels.x), slice = int(p.texels.y);
+  const int y0 = i0.y * row, y1 = i1.y * row, z0 = i0.z * slice, z1 = i1.z * slice;
+  AtlasCorners k;
+  k.t000 = z0 + y0 + i0.x;
+  k.t100 = z0 + y0 + i1.x;
+  k.t010 = z0 + y1 + i0.x;
+  k.t110 = z0 + y1 + i1.x;
+  k.t001 = z1 + y0 + i0.x;
+  k.t101 = z1 + y0 + i1.x;
+  k.t011 = z1 + y1 + i0.x;
+  k.t111 = z1 + y1 + i1.x;
+  k.f = a - 0.5 - lo;
+  return k;
+}
+
+// Texel t of texel view IMG (a literal element of the binding: arrays of
+// texel buffers take constant indices only) as the integer it stores: a u8
+// texel is the low or high half of a 16-bit element.
+#define VXR_TEXEL(IMG, t)                                                     \
+  float(VXR_SC_TEXEL_BYTES == 2u ? imageLoad(IMG, t).r                           \
+                                 : (imageLoad(IMG, (t) >> 1).r >> (((t) & 1) * 8)) & 0xffu)
+// The filter over IMG at `k`: x first, then y, then z, as the sampler does.
+#define VXR_FILTERED(IMG, k)                                                                \
+  mix(mix(mix(VXR_TEXEL(IMG, k.t000), VXR_TEXEL(IMG, k.t100), k.f.x),                     \
+          mix(VXR_TEXEL(IMG, k.t010), VXR_TEXEL(IMG, k.t110), k.f.x), k.f.y),             \
+      mix(mix(VXR_TEXEL(IMG, k.t001), VXR_TEXEL(IMG, k.t101), k.f.x),                     \
+          mix(VXR_TEXEL(IMG, k.t011), VXR_TEXEL(IMG, k.t111), k.f.x), k.f.y),             \
+      k.f.z)
+
 vec4 vxr_sample(vec3 pos) {
+  const int n = VXR_SC_CHANNELS;
+  const uint b = VXR_SC_TEXEL_BYTES;
+  if (b != 0u) {
+    // UNORM: the stored integers filtered, then scaled once.
+    const AtlasCorners k = atlas_corners(g_atlas_origin + pos);
+    vec4 v = vec4(VXR_FILTERED(atlas_texels[0], k), 0.0, 0.0, 0.0);
+    if (n > 1) v.y = VXR_FILTERED(atlas_texels[1], k);
+    if (n > 2) v.z = VXR_FILTERED(atlas_texels[2], k);
+    if (n > 3) v.w = VXR_FILTERED(atlas_texels[3], k);
+    return v * (b == 2u ? 1.0 / 65535.0 : 1.0 / 255.0);
+  }
   const vec3 uvw = (g_atlas_origin + pos) * p.atlas_inv.xyz;
   // Constant indices only: dynamic indexing of sampler arrays needs a feature.
   vec4 v = vec4(textureLod(atlas_tex[0], uvw, 0.0).r, 0.0, 0.0, 0.0);
-  const int n = VXR_SC_CHANNELS;
   if (n > 1) v.y = textureLod(atlas_tex[1], uvw, 0.0).r;
   if (n > 2) v.z = textureLod(atlas_tex[2], uvw, 0.0).r;
   if (n > 3) v.w = textureLod(atlas_tex[3], uvw, 0.0).r;

@@ -146,6 +146,9 @@ Result<Image> create_image(const Context& ctx, const ImageCreateInfo& info) {
     VkSubresourceLayout layout{};
     vkGetImageSubresourceLayout(dev, raw, &sub, &layout);
     img.mapped = static_cast<uint8_t*>(base) + layout.offset;
+    img.mapped_offset = layout.offset;
+    img.memory_bytes = req.size;
+    img.memory_type = type;
     img.row_pitch = layout.rowPitch;
     img.depth_pitch = info.type == VK_IMAGE_TYPE_3D ? layout.depthPitch : layout.size;
   }
@@ -273,6 +276,32 @@ Result<Handle<VkSampler>> create_linear_clamp_sampler(const Context& ctx) {
 }
 Result<Handle<VkSampler>> create_nearest_clamp_sampler(const Context& ctx) {
   return make_sampler(ctx, VK_FILTER_NEAREST);
+}
+
+Result<ImageTexels> create_image_texels(const Context& ctx, const Image& image, VkFormat element) {
+  if (!image.mapped) return unsupported("image texels: the image is not host-mapped");
+  const uint32_t eb = format_texel_bytes(element);
+  // Whole elements over the texels (the memory past them is the image's too).
+  const VkDeviceSize bytes = (image.depth_pitch * image.extent.depth + eb - 1) / eb * eb;
+  const VkPhysicalDeviceLimits& lim = ctx.limits();
+  if (eb == 0 || image.mapped_offset % lim.minTexelBufferOffsetAlignment != 0 ||
+      image.mapped_offset + bytes > image.memory_bytes || bytes / eb > lim.maxTexelBufferElements)
+    return unsupported("image texels: " + std::to_string(bytes) + " bytes of texels do not fit one texel view");
+  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  bci.size = image.memory_bytes;
+  bci.usage = VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT;
+  bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VkBuffer raw = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkCreateBuffer(ctx.device(), &bci, nullptr, &raw));
+  ImageTexels t;
+  t.buffer = Handle<VkBuffer>(ctx.device(), raw);
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(ctx.device(), raw, &req);
+  if (req.size > image.memory_bytes || !(req.memoryTypeBits & (1u << image.memory_type)))
+    return unsupported("image texels: a buffer cannot be bound to the image's memory");
+  VXR_VK_TRY(vkBindBufferMemory(ctx.device(), raw, image.memory.get(), 0));
+  VXR_ASSIGN_OR_RETURN(t.view, create_buffer_view(ctx, raw, element, image.mapped_offset, bytes));
+  return t;
 }
 
 Result<Handle<VkBufferView>> create_buffer_view(const Context& ctx, VkBuffer buffer, VkFormat format,

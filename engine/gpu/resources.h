@@ -63,6 +63,9 @@ struct Image {
   // Host-mapped images only: texel (x, y, z) is at mapped + z * depth_pitch + y * row_pitch + x * texel bytes.
   uint8_t* mapped = nullptr;
   VkDeviceSize row_pitch = 0, depth_pitch = 0;
+  VkDeviceSize mapped_offset = 0;  // texel (0, 0, 0)'s offset in `memory`
+  VkDeviceSize memory_bytes = 0;   // the size of `memory`
+  uint32_t memory_type = 0;
 };
 
 // Whether create_image can make a host-mapped image of this kind: a device
@@ -102,6 +105,19 @@ uint64_t readback_count();
 
 Result<Handle<VkSampler>> create_linear_clamp_sampler(const Context& ctx);
 Result<Handle<VkSampler>> create_nearest_clamp_sampler(const Context& ctx);
+
+// A host-mapped image's texels as a storage texel buffer over its memory,
+// in elements of `element` (R8_UINT, R16_UINT, R32_UINT; the first starts at
+// texel (0, 0, 0)), for shaders that filter by hand with the image's row
+// and depth pitch. A linear image in GENERAL and a buffer over the same
+// memory read the same bytes (Vulkan's rules for host-accessible aliases).
+// kUnsupported where the image is not host-mapped or its texels do not fit
+// one texel view.
+struct ImageTexels {
+  Handle<VkBuffer> buffer;
+  Handle<VkBufferView> view;
+};
+Result<ImageTexels> create_image_texels(const Context& ctx, const Image& image, VkFormat element);
 
 // A texel view of `range` bytes of `buffer` from `offset` (the buffer needs a texel-buffer usage).
 Result<Handle<VkBufferView>> create_buffer_view(const Context& ctx, VkBuffer buffer, VkFormat format,

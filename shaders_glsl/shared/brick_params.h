@@ -72,11 +72,15 @@ struct BrickCastParams {
                    // z: flags, w: the pool's cells per axis (cell ranges; y or 2y: a walked cell is 2x2x2 of them)
   vec4 atlas_inv;  // xyz: 1 / atlas size in texels, w: empty-space cell size in voxels
   uvec4 warp;      // lens warp (z > 1): x, y: rays across each outer band along x, y; z: pixels per ray there
+  // The rays' own trilinear filter over the atlas's texel view
+  // (specialisation constant 115): x, y: row and slice pitch in texels; z:
+  // the last texel along x and y (x | y << 16), w: along z.
+  uvec4 texels;
 };
 
 #ifdef __cplusplus
 static_assert(sizeof(BrickRecord) == 96, "brick record layout");
-static_assert(sizeof(BrickCastParams) == 64, "push constants must stay within 128 bytes");
+static_assert(sizeof(BrickCastParams) == 80, "push constants must stay within 128 bytes");
 }  // namespace vxr::shader
 #endif
 

@@ -217,10 +217,16 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   p->edge_ = source.chunk_size() + 2 * p->apron_;
   p->channel_bytes_ = uint64_t(p->edge_) * p->edge_ * p->edge_ * p->texel_bytes_;
   p->brick_bytes_ = p->channel_bytes_ * nch;
+  // Texel views (see above): a CPU device with direct writes.
+  const bool want_views = options.texel_views && options.direct_writes && p->texel_bytes_ <= 2 &&
+                          ctx.info().is_cpu();
   if (auto_slots) {
-    // Halve the largest axis until the atlases fit (at least 2 x 2 x 2).
+    // Halve the largest axis until the atlases fit (at least 2 x 2 x 2), and
+    // with texel views until each atlas fits one view.
+    const uint64_t view_bytes = uint64_t(ctx.limits().maxTexelBufferElements) * gpu::format_texel_bytes(kAtlasTexelElement);
     slots = {16, 16, 8};
-    while (uint64_t(slots.x) * slots.y * slots.z * p->brick_bytes_ > options.auto_atlas_bytes &&
+    while ((uint64_t(slots.x) * slots.y * slots.z * p->brick_bytes_ > options.auto_atlas_bytes ||
+            (want_views && uint64_t(slots.x) * slots.y * slots.z * p->channel_bytes_ > view_bytes)) &&
            slots.x * slots.y * slots.z > 8) {
       uint32_t& a = slots.x >= slots.y && slots.x >= slots.z ? slots.x : slots.y >= slots.z ? slots.y : slots.z;
       a /= 2;
@@ -256,6 +262,16 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
                               VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
     }));
     p->scratch_.resize(p->brick_bytes_);
+    // All atlases or none: the rays read every channel the same way.
+    for (const gpu::Image& atlas : p->atlases_) {
+      if (!want_views) break;
+      Result<gpu::ImageTexels> w = gpu::create_image_texels(ctx, atlas, kAtlasTexelElement);
+      if (!w.is_ok()) {
+        p->texel_views_.clear();
+        break;
+      }
+      p->texel_views_.push_back(std::move(*w));
+    }
   } else {
     VXR_ASSIGN_OR_RETURN(p->staging_, gpu::create_buffer(ctx, {staging_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                                                gpu::MemoryIntent::kUpload, "brick staging ring"}));

@@ -35,6 +35,14 @@
 // GPUs) the atlases are linear images mapped for their life, kept in GENERAL,
 // and a brick is written straight into its slot: no staging ring, no copy
 // command, no wait. The bytes in the atlas are the same either way.
+//
+// Texel views (a CPU device, direct writes, u8 and u16 texels): each
+// atlas's memory is also a storage texel buffer of 16-bit elements
+// (gpu::create_image_texels, kAtlasTexelElement), and the ray caster filters
+// those by hand instead of calling the sampler, which on lavapipe costs
+// several times a trilinear filter written in the shader
+// (docs/skipping-perf.md, tenth round). The automatic slot grid then keeps
+// each atlas within one view (maxTexelBufferElements elements).
 #pragma once
 
 #include <functional>
@@ -68,8 +76,17 @@ struct BrickPoolOptions {
   // Write bricks straight into host-mapped atlases where the device allows it
   // (gpu::host_mapped_image_supported); false: always through the staging ring.
   bool direct_writes = true;
+  // With direct writes on a CPU device, a word view of each atlas for the
+  // ray caster's own trilinear filter (see above); false: none, the rays use
+  // the sampler (tests compare the two).
+  bool texel_views = true;
 };
 
+
+// The texel views' element: 16 bits, which lavapipe loads lane by lane
+// (32-bit elements take a gather instruction, slower on the machines
+// measured); a u8 texel is half of one.
+constexpr VkFormat kAtlasTexelElement = VK_FORMAT_R16_UINT;
 
 // Largest set of atlases create() makes: lavapipe has one 2 GiB heap; leave room for the rest.
 constexpr uint64_t kMaxAtlasBytes = (1ull << 31) - (64ull << 20);
@@ -173,6 +190,10 @@ class BrickPool {
     return direct_ ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
   }
   bool writes_direct() const { return direct_; }
+  // Atlas c's texel view, or null (no texel views: the rays sample the atlas).
+  const gpu::ImageTexels* atlas_texels_view(uint32_t channel = 0) const {
+    return channel < texel_views_.size() ? &texel_views_[channel] : nullptr;
+  }
   uint32_t channels() const { return static_cast<uint32_t>(atlases_.size()); }
   uint32_t source_channel(uint32_t i) const { return channel_map_[i]; }
   uint32_t apron() const { return apron_; }
@@ -240,6 +261,7 @@ class BrickPool {
   uint64_t channel_bytes_ = 0;  // one brick, one channel
   uint64_t brick_bytes_ = 0;
   std::vector<gpu::Image> atlases_;
+  std::vector<gpu::ImageTexels> texel_views_;  // one per atlas, or none
   std::vector<uint32_t> channel_map_;
   gpu::Buffer staging_;       // staged writes only
   bool direct_ = false;       // direct writes (see above)

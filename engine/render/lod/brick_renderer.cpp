@@ -34,6 +34,7 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {14, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits' window
       {15, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // brick records' window
       {16, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell keys as texels
+      {17, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, VXR_MAX_CHANNELS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // atlas texel views
   };
 }
 
@@ -310,6 +311,9 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
       gpu::transition_image(cmd, *img, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
                             VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   }));
+  VXR_ASSIGN_OR_RETURN(r->no_texels_buf_, gpu::create_buffer(ctx, {16, VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT,
+                                                                    gpu::MemoryIntent::kDeviceLocal, "no atlas texels"}));
+  VXR_ASSIGN_OR_RETURN(r->no_texels_, gpu::create_buffer_view(ctx, r->no_texels_buf_.buffer, kAtlasTexelElement, 0, 16));
   std::vector<VkDescriptorSet> all = r->view_sets_;
   all.push_back(r->mono_set_);
   VXR_RETURN_IF_ERROR(r->ensure_cell_keys());
@@ -317,6 +321,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
     gpu::write_storage_image(ctx, set, 9, r->no_under_depth_.view);
     gpu::write_storage_image(ctx, set, 10, r->no_under_color_.view);
     if (set != r->mono_set_) r->bind_atlases(set, r->pool_atlases());
+    else r->bind_atlases(set, {});  // the texel views' stand-ins until set_monolithic
     // The monolithic texture has no cells (its record says so); the binding still needs a buffer.
     gpu::write_storage_buffer(ctx, set, 8, r->pool_->cell_ranges().buffer);
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
@@ -486,11 +491,11 @@ bool any_gamma(const RenderSettings& s, uint32_t channels) {
 }
 }  // namespace
 
-Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
-                                                                UniformWindows windows, SampleWork work, bool waves,
-                                                                bool no_bricks) {
+Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model,
+                                                                uint32_t texel_bytes, bool cells, UniformWindows windows,
+                                                                SampleWork work, bool waves, bool no_bricks) {
   ShaderVariant v{.model = model, .channels = channels(), .cells = cells, .windows = windows, .work = work,
-                  .no_bricks = no_bricks, .waves = waves};
+                  .no_bricks = no_bricks, .waves = waves, .texel_bytes = texel_bytes};
   v.gradient = s.gradient_opacity.enabled;
   v.depth_color = s.depth_color != DepthColorMode::kOff;
   v.gamma = any_gamma(s, v.channels);
@@ -526,7 +531,8 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& 
       {111, v.windows.key_texels},
       {112, v.composite ? uint32_t(VXR_BLEND_COMPOSITE) : uint32_t(VXR_BLEND_ADDITIVE)},
       {113, v.waves},
-      {114, v.classify}}};
+      {114, v.classify},
+      {115, v.texel_bytes}}};
   VariantKey key;  // the constants' values identify the variant
   for (size_t i = 0; i < constants.size(); ++i) key[i] = constants[i].value;
   std::map<VariantKey, gpu::ComputePipeline>& variants = pipes_->variants;
@@ -538,25 +544,58 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& 
   return &variants.emplace(key, std::move(p)).first->second;
 }
 
-std::vector<const gpu::Image*> BrickRenderer::pool_atlases() const {
-  std::vector<const gpu::Image*> out;
-  for (uint32_t c = 0; c < pool_->channels(); ++c) out.push_back(&pool_->atlas(c));
+BrickRenderer::Atlases BrickRenderer::pool_atlases() const {
+  Atlases out;
+  for (uint32_t c = 0; c < pool_->channels(); ++c) {
+    out.images.push_back(&pool_->atlas(c));
+    if (pool_->atlas_texels_view(c)) out.texels.push_back(pool_->atlas_texels_view(c));
+  }
   return out;
 }
 
-void BrickRenderer::bind_atlases(VkDescriptorSet set, const std::vector<const gpu::Image*>& atlases) {
+void BrickRenderer::bind_atlases(VkDescriptorSet set, const Atlases& atlases) {
   // Slots past the drawn channels repeat channel 0's (never read: the shader
   // is specialised for the channel count).
+  VkWriteDescriptorSet w[2] = {};
   VkDescriptorImageInfo infos[VXR_MAX_CHANNELS];
-  for (size_t c = 0; c < VXR_MAX_CHANNELS; ++c)
-    infos[c] = {linear_, atlases[c < atlases.size() ? c : 0]->view, atlases[c < atlases.size() ? c : 0]->layout};
-  VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-  w.dstSet = set;
-  w.dstBinding = 0;
-  w.descriptorCount = VXR_MAX_CHANNELS;
-  w.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  w.pImageInfo = infos;
-  vkUpdateDescriptorSets(ctx_.device(), 1, &w, 0, nullptr);
+  VkBufferView views[VXR_MAX_CHANNELS];
+  const size_t n = atlases.images.size(), nt = atlases.texels.size();
+  for (size_t c = 0; c < VXR_MAX_CHANNELS; ++c) {
+    if (n) infos[c] = {linear_, atlases.images[c < n ? c : 0]->view, atlases.images[c < n ? c : 0]->layout};
+    views[c] = nt ? atlases.texels[c < nt ? c : 0]->view.get() : no_texels_.get();
+  }
+  uint32_t writes = 0;
+  if (n) {
+    w[writes].dstBinding = 0;
+    w[writes].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    w[writes++].pImageInfo = infos;
+  }
+  w[writes].dstBinding = 17;
+  w[writes].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
+  w[writes++].pTexelBufferView = views;
+  for (uint32_t i = 0; i < writes; ++i) {
+    w[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+    w[i].dstSet = set;
+    w[i].descriptorCount = VXR_MAX_CHANNELS;
+  }
+  vkUpdateDescriptorSets(ctx_.device(), writes, w, 0, nullptr);
+}
+
+BrickRenderer::Atlases BrickRenderer::mono_atlases() const {
+  Atlases out;
+  for (const gpu::Image& t : mono_tex_) out.images.push_back(&t);
+  for (const gpu::ImageTexels& t : mono_texels_) out.texels.push_back(&t);
+  return out;
+}
+
+BrickRenderer::AtlasReads BrickRenderer::reads_of(const gpu::Image& a, bool by_hand) {
+  AtlasReads r;
+  r.texels = {a.extent.width, a.extent.height, a.extent.depth};
+  if (by_hand) {
+    r.texel_bytes = gpu::format_texel_bytes(a.format);
+    r.pitch = {uint32_t(a.row_pitch / r.texel_bytes), uint32_t(a.depth_pitch / r.texel_bytes)};
+  }
+  return r;
 }
 
 namespace {
@@ -695,7 +734,7 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
 }
 
 Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
-                                  uint32_t w, uint32_t h, uint32_t bricks, const glm::uvec3& atlas_texels,
+                                  uint32_t w, uint32_t h, uint32_t bricks, const AtlasReads& atlas,
                                   BrickPassMode mode, const WorkSpans& spans, const RenderTarget& target,
                                   CellWalk cell_walk, SampleWork work, CellClassInputs* classify,
                                   BrickFrameStats* stats) {
@@ -743,9 +782,11 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                        cell_keys_.size / sizeof(float) <= ctx_.limits().maxTexelBufferElements;
   const gpu::ComputePipeline* pipe = nullptr;
   const bool waves = mode == BrickPassMode::kMultipass;
-  VXR_ASSIGN_OR_RETURN(pipe, pipeline_for(s, model, cells, windows, work, waves));
+  VXR_ASSIGN_OR_RETURN(pipe, pipeline_for(s, model, atlas.texel_bytes, cells, windows, work, waves));
+  const glm::uvec3& atlas_texels = atlas.texels;
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(walk.cell_size));
+  p.texels = glm::uvec4(atlas.pitch, (atlas_texels.x - 1) | (atlas_texels.y - 1) << 16, atlas_texels.z - 1);
   if (target.warp_x.active() || target.warp_y.active())
     p.warp = glm::uvec4(target.warp_x.active() ? target.warp_x.edge_warped : 0u,
                         target.warp_y.active() ? target.warp_y.edge_warped : 0u,
@@ -815,7 +856,8 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
     // what an empty ray gives, with the variant that has no brick loop.
     // Built with the marching variant, even while no tile is empty, so a
     // view that later leaves tiles empty builds no pipeline mid-session.
-    VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* empty_pipe, pipeline_for(s, model, false, {}, work, false, true));
+    VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* empty_pipe,
+                         pipeline_for(s, model, atlas.texel_bytes, false, {}, work, false, true));
     dispatch_entries(spans.marched_tiles, VXR_BRICK_TILE_LISTS | VXR_BRICK_TILE_SUBSET | out_flags);
     if (spans.empty_tiles.y > 0) {
       // Other pixels of the same image, but the validation layer tracks the
@@ -1238,7 +1280,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
       walk = opt_.cell_walk == BrickCellWalk::kCells ? CellWalk::kCells : CellWalk::kGroups;
   }
   VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),
-                                  pool_->atlas_texels(), mode, spans, target, walk, frame.sample_work, &classify,
+                                  reads_of(pool_->atlas(), pool_->atlas_texels_view() != nullptr), mode, spans, target,
+                                  walk, frame.sample_work, &classify,
                                   &st));
   ++views_;
   table_used_ = table_base + table_bytes;
@@ -1370,6 +1413,12 @@ Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
   const uint64_t nx = li.dims[0], ny = li.dims[1], nz = li.dims[2];
   const uint32_t cs = src_.chunk_size(), a = src_.apron(), e = cs + 2 * a;
   std::vector<gpu::Image> textures;
+  std::vector<gpu::ImageTexels> views;
+  const VkExtent3D extent{uint32_t(nx), uint32_t(ny), uint32_t(nz)};
+  const VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  // Read as the pool's atlases are (by hand through texel views, or sampled), so both paths agree.
+  const bool host_mapped = pool_->atlas_texels_view() && tb <= 2 &&
+                           gpu::host_mapped_image_supported(ctx_, VK_IMAGE_TYPE_3D, format, usage, extent);
   for (uint32_t c = 0; c < channels(); ++c) {
     std::vector<uint8_t> dense(nx * ny * nz * sb);  // native voxels, then converted like the pool's
     for (uint32_t cz = 0; cz < li.chunk_counts[2]; ++cz)
@@ -1386,17 +1435,31 @@ Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
         }
     std::vector<uint8_t> texels(nx * ny * nz * tb);
     convert_to_texels(dtype, dense.data(), nx * ny * nz, texels.data());
-    VXR_ASSIGN_OR_RETURN(gpu::Image tex,
-                         gpu::create_image(ctx_, {VK_IMAGE_TYPE_3D, format, {uint32_t(nx), uint32_t(ny), uint32_t(nz)},
-                                                  VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                                  "monolithic volume"}));
-    VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, tex, texels.data(), texels.size()));
+    gpu::ImageCreateInfo ii{VK_IMAGE_TYPE_3D, format, extent, usage, "monolithic volume"};
+    ii.host_mapped = host_mapped;
+    VXR_ASSIGN_OR_RETURN(gpu::Image tex, gpu::create_image(ctx_, ii));
+    if (host_mapped) {
+      for (uint64_t z = 0; z < nz; ++z)
+        for (uint64_t y = 0; y < ny; ++y)
+          std::memcpy(tex.mapped + z * tex.depth_pitch + y * tex.row_pitch, &texels[(z * ny + y) * nx * tb], nx * tb);
+      Result<gpu::ImageTexels> view = gpu::create_image_texels(ctx_, tex, kAtlasTexelElement);
+      if (view.is_ok()) views.push_back(std::move(*view));
+    } else {
+      VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, tex, texels.data(), texels.size()));
+    }
     textures.push_back(std::move(tex));
   }
+  if (host_mapped)
+    VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
+      for (gpu::Image& tex : textures)
+        gpu::transition_image(cmd, tex, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_WRITE_BIT,
+                              VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    }));
+  if (views.size() != textures.size()) views.clear();  // every channel by hand, or none
+  mono_texels_.clear();  // before the textures whose memory they view
   mono_tex_ = std::move(textures);
-  std::vector<const gpu::Image*> views;
-  for (const gpu::Image& t : mono_tex_) views.push_back(&t);
-  bind_atlases(mono_set_, views);
+  mono_texels_ = std::move(views);
+  bind_atlases(mono_set_, mono_atlases());
   mono_level_ = level;
   mono_timepoint_ = timepoint;
   return Status::ok();
@@ -1451,7 +1514,7 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
     std::memcpy(params_.mapped, &params, sizeof(params));
     gpu::write_storage_image(ctx_, mono_set_, 2, target_.view);
     gpu::write_storage_image(ctx_, mono_set_, 3, accum_.view);
-    recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, glm::uvec3(li.dims[0], li.dims[1], li.dims[2]),
+    recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, reads_of(mono_tex_.at(0), !mono_texels_.empty()),
                            BrickPassMode::kSinglePass, {}, target, CellWalk::kOff, SampleWork::kShade, nullptr,
                            &st);
   }));

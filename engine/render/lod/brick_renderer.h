@@ -75,7 +75,7 @@ namespace vxr {
 // constants' values, BrickRenderer::ShaderVariant). Renderers on one gpu::Context may
 // share them: lavapipe compiles each variant on the CPU, which dominates
 // creating a renderer for a small volume (tests, the stability suite).
-inline constexpr size_t kVariantConstants = 15;  // brick_raycast.comp's ids 100..114
+inline constexpr size_t kVariantConstants = 16;  // brick_raycast.comp's ids 100..115
 using VariantKey = std::array<uint32_t, kVariantConstants>;
 struct BrickPipelines {
   std::map<VariantKey, gpu::ComputePipeline> variants;
@@ -266,8 +266,23 @@ class BrickRenderer final : public VolumeRenderer {
   Status ensure_timepoint(uint32_t timepoint);
   // Pins the top level of `timepoint` and, with preload_if_fits, every chunk.
   Status pin_resident(uint32_t timepoint);
-  void bind_atlases(VkDescriptorSet set, const std::vector<const gpu::Image*>& atlases);
-  std::vector<const gpu::Image*> pool_atlases() const;
+  // The atlases a set binds, per drawn channel (binding 0), and their texel
+  // views (binding 17) where the rays filter by hand; no views: they sample.
+  struct Atlases {
+    std::vector<const gpu::Image*> images;
+    std::vector<const gpu::ImageTexels*> texels;
+  };
+  void bind_atlases(VkDescriptorSet set, const Atlases& atlases);
+  Atlases pool_atlases() const;
+  Atlases mono_atlases() const;  // set_monolithic's
+  // What the rays need to read them (record_cast).
+  struct AtlasReads {
+    glm::uvec3 texels{0};      // the atlas's size
+    uint32_t texel_bytes = 0;  // hand filtering (constant 115): 1 or 2; 0: the sampler
+    glm::uvec2 pitch{0};       // row and slice pitch in texels (hand filtering)
+  };
+  // Of atlas `a` (channel 0's; the others share its layout), read by hand through texel views or sampled.
+  static AtlasReads reads_of(const gpu::Image& a, bool by_hand);
   // Which per-ray reads go through a uniform buffer or texel view over their
   // storage buffer (brick_raycast.comp constants 108, 109, 111): where all of
   // a view's fit. lavapipe runs both sides of a branch, so it is a constant.
@@ -277,7 +292,7 @@ class BrickRenderer final : public VolumeRenderer {
     bool key_texels = false;  // the MIP / MinIP cells' keys as texels (16 over 11; constant 111)
   };
   // One pipeline's specialisation constants: raycast_core.glsl ids 100..105
-  // and 112, brick_raycast.comp 106..111, 113 and 114.
+  // and 112, brick_raycast.comp 106..111 and 113..115.
   struct ShaderVariant {
     uint32_t model = VXR_MODEL_EMISSION_ABSORPTION;  // VXR_MODEL_*
     uint32_t channels = 1;
@@ -289,12 +304,13 @@ class BrickRenderer final : public VolumeRenderer {
     bool no_bricks = false;  // no brick loop: for tiles no brick touches
     bool waves = false;      // its dispatches carry rays between passes (BrickPassMode::kMultipass)
     bool classify = false;   // the cell classification pass's pipeline (no other dispatch carries its code)
+    uint32_t texel_bytes = 0;  // AtlasReads::texel_bytes
   };
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
   // features), for whether its dispatches use empty-space cells, the
   // uniform windows it reads and whether it marches multipass waves.
-  Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, bool cells,
-                                                   UniformWindows windows, SampleWork work, bool waves,
+  Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, uint32_t texel_bytes,
+                                                   bool cells, UniformWindows windows, SampleWork work, bool waves,
                                                    bool no_bricks = false);
   // The classification pass's pipeline: only what classify_cells reads is specialised.
   Result<const gpu::ComputePipeline*> classify_pipeline(const RenderSettings& s, uint32_t model);
@@ -355,7 +371,7 @@ class BrickRenderer final : public VolumeRenderer {
   // view's records, window, table and bits region (null: no cells walked);
   // when they are new, they are swapped into the view's entry of classified_.
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
-                     uint32_t height, uint32_t bricks, const glm::uvec3& atlas_texels, BrickPassMode mode,
+                     uint32_t height, uint32_t bricks, const AtlasReads& atlas, BrickPassMode mode,
                      const WorkSpans& spans, const RenderTarget& target, CellWalk cells,
                      SampleWork work, CellClassInputs* classify, BrickFrameStats* stats);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
@@ -385,6 +401,9 @@ class BrickRenderer final : public VolumeRenderer {
   gpu::Image target_, float_target_, accum_;
   gpu::Image no_under_depth_, no_under_color_;  // 1x1, bound where a view has no underlay
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
+  std::vector<gpu::ImageTexels> mono_texels_;  // per drawn channel, or none (declared after mono_tex_: destroyed first)
+  gpu::Buffer no_texels_buf_;  // 16 bytes: the stand-in texel view of sets whose rays sample
+  gpu::Handle<VkBufferView> no_texels_;
   std::vector<uint32_t> tile_rows_;  // build_tile_lists: the tile rows in dispatch order, kept while the height stays
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
