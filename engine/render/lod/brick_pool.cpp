@@ -223,7 +223,8 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   if (auto_slots) {
     // Halve the largest axis until the atlases fit (at least 2 x 2 x 2), and
     // with texel views until each atlas fits one view.
-    const uint64_t view_bytes = uint64_t(ctx.limits().maxTexelBufferElements) * gpu::format_texel_bytes(kAtlasTexelElement);
+    const uint64_t view_bytes =
+        uint64_t(ctx.limits().maxTexelBufferElements) * gpu::format_texel_bytes(kAtlasTexelElement);
     slots = {16, 16, 8};
     while ((uint64_t(slots.x) * slots.y * slots.z * p->brick_bytes_ > options.auto_atlas_bytes ||
             (want_views && uint64_t(slots.x) * slots.y * slots.z * p->channel_bytes_ > view_bytes)) &&
