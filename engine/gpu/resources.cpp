@@ -194,6 +194,19 @@ Status upload_image(Context& ctx, Image& image, const void* texels, size_t bytes
   if (expected != bytes)
     return invalid_argument("upload_image: got " + std::to_string(bytes) + " bytes, image needs " +
                             std::to_string(expected));
+  if (image.mapped) {
+    const size_t row = size_t(image.extent.width) * format_texel_bytes(image.format);
+    const auto* src = static_cast<const uint8_t*>(texels);
+    for (uint32_t z = 0; z < image.extent.depth; ++z)
+      for (uint32_t y = 0; y < image.extent.height; ++y)
+        std::memcpy(image.mapped + z * image.depth_pitch + y * image.row_pitch,
+                    src + (size_t(z) * image.extent.height + y) * row, row);
+    return ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+      transition_image(cmd, image, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                       VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    });
+  }
   VXR_ASSIGN_OR_RETURN(Buffer staging,
                        create_buffer(ctx, {bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryIntent::kUpload, "staging"}));
   std::memcpy(staging.mapped, texels, bytes);

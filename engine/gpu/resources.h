@@ -91,7 +91,8 @@ void transition_image(VkCommandBuffer cmd, Image& image, VkImageLayout new_layou
                       VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access);
 
 // Copies tightly packed texels into the whole image through a staging buffer,
-// waits, and leaves the image in SHADER_READ_ONLY_OPTIMAL.
+// waits, and leaves the image in SHADER_READ_ONLY_OPTIMAL. A host-mapped
+// image: the rows are written in place and it is left in GENERAL.
 Status upload_image(Context& ctx, Image& image, const void* texels, size_t bytes);
 
 // Copies the whole image (2D) back into `out` (tightly packed), waits, and

@@ -1438,23 +1438,13 @@ Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
     gpu::ImageCreateInfo ii{VK_IMAGE_TYPE_3D, format, extent, usage, "monolithic volume"};
     ii.host_mapped = host_mapped;
     VXR_ASSIGN_OR_RETURN(gpu::Image tex, gpu::create_image(ctx_, ii));
+    VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, tex, texels.data(), texels.size()));
     if (host_mapped) {
-      for (uint64_t z = 0; z < nz; ++z)
-        for (uint64_t y = 0; y < ny; ++y)
-          std::memcpy(tex.mapped + z * tex.depth_pitch + y * tex.row_pitch, &texels[(z * ny + y) * nx * tb], nx * tb);
       Result<gpu::ImageTexels> view = gpu::create_image_texels(ctx_, tex, kAtlasTexelElement);
       if (view.is_ok()) views.push_back(std::move(*view));
-    } else {
-      VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, tex, texels.data(), texels.size()));
     }
     textures.push_back(std::move(tex));
   }
-  if (host_mapped)
-    VXR_RETURN_IF_ERROR(ctx_.submit_and_wait([&](VkCommandBuffer cmd) {
-      for (gpu::Image& tex : textures)
-        gpu::transition_image(cmd, tex, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_WRITE_BIT,
-                              VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-    }));
   if (views.size() != textures.size()) views.clear();  // every channel by hand, or none
   mono_texels_.clear();  // before the textures whose memory they view
   mono_tex_ = std::move(textures);
