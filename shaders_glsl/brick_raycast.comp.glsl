@@ -122,8 +122,8 @@ layout(constant_id = 113) const bool VXR_SC_WAVES = true;
 layout(constant_id = 114) const bool VXR_SC_CLASSIFY = true;
 
 // 0: the rays sample the atlases (binding 0). 1 or 2: the atlas texels'
-// bytes (R8 or R16 UNORM), and the rays filter their texel views (binding
-// 17) by hand: on lavapipe each sampler call is a function call costing
+// bytes (R8 UNORM, stored in pairs, or R16 UNORM), and the rays filter their
+// texel views (binding 17) by hand: on lavapipe each sampler call is a function call costing
 // several times the loads and arithmetic of the filter below
 // (docs/skipping-perf.md, tenth round).
 layout(constant_id = 115) const uint VXR_SC_TEXEL_BYTES = 0u;
@@ -157,6 +157,10 @@ struct AtlasCorners {
 };
 
 AtlasCorners atlas_corners(vec3 a) {
+  // Texel pairs (below) hold x and x + 1: left of the first texel centre the
+  // coordinate is clamped to it (weight 0 on the pair's second texel), which
+  // is what the clamped indices give.
+  if (VXR_SC_TEXEL_BYTES == 1u) a.x = max(a.x, 0.5);
   const vec3 lo = floor(a - 0.5);
   const ivec3 last = ivec3(p.texels.z & 0xffffu, p.texels.z >> 16u, p.texels.w);
   const ivec3 i0 = clamp(ivec3(lo), ivec3(0), last), i1 = clamp(ivec3(lo) + 1, ivec3(0), last);
@@ -175,12 +179,9 @@ AtlasCorners atlas_corners(vec3 a) {
   return k;
 }
 
-// Texel t of texel view IMG (a literal element of the binding: arrays of
-// texel buffers take constant indices only) as the integer it stores: a u8
-// texel is the low or high half of a 16-bit element.
-#define VXR_TEXEL(IMG, t)                                                     \
-  float(VXR_SC_TEXEL_BYTES == 2u ? imageLoad(IMG, t).r                           \
-                                 : (imageLoad(IMG, (t) >> 1).r >> (((t) & 1) * 8)) & 0xffu)
+// Texel t of a u16 texel view IMG (a literal element of the binding: arrays
+// of texel buffers take constant indices only) as the integer it stores.
+#define VXR_TEXEL(IMG, t) float(imageLoad(IMG, t).r)
 // The filter over IMG at `k`: x first, then y, then z, as the sampler does.
 #define VXR_FILTERED(IMG, k)                                                                \
   mix(mix(mix(VXR_TEXEL(IMG, k.t000), VXR_TEXEL(IMG, k.t100), k.f.x),                     \
@@ -188,18 +189,34 @@ AtlasCorners atlas_corners(vec3 a) {
       mix(mix(VXR_TEXEL(IMG, k.t001), VXR_TEXEL(IMG, k.t101), k.f.x),                     \
           mix(VXR_TEXEL(IMG, k.t011), VXR_TEXEL(IMG, k.t111), k.f.x), k.f.y),             \
       k.f.z)
+// u8 texels in pairs (BrickPool texel_pairs): element t holds texel t (low
+// byte) and its +x neighbour (high byte), so a row of the filter is one
+// load: 4 loads a sample instead of 8 (`vxr bench roofline`: docs/skipping-perf.md, eleventh round).
+float vxr_pair_row(uint pair, float fx) { return mix(float(pair & 0xffu), float(pair >> 8u), fx); }
+#define VXR_PAIR_ROW(IMG, t, k) vxr_pair_row(imageLoad(IMG, t).r, k.f.x)
+#define VXR_PAIRS_FILTERED(IMG, k)                                                                   \
+  mix(mix(VXR_PAIR_ROW(IMG, k.t000, k), VXR_PAIR_ROW(IMG, k.t010, k), k.f.y),                       \
+      mix(VXR_PAIR_ROW(IMG, k.t001, k), VXR_PAIR_ROW(IMG, k.t011, k), k.f.y), k.f.z)
 
 vec4 vxr_sample(vec3 pos) {
   const int n = VXR_SC_CHANNELS;
   const uint b = VXR_SC_TEXEL_BYTES;
-  if (b != 0u) {
-    // UNORM: the stored integers filtered, then scaled once.
+  // UNORM: the stored integers filtered, then scaled once.
+  if (b == 1u) {
+    const AtlasCorners k = atlas_corners(g_atlas_origin + pos);
+    vec4 v = vec4(VXR_PAIRS_FILTERED(atlas_texels[0], k), 0.0, 0.0, 0.0);
+    if (n > 1) v.y = VXR_PAIRS_FILTERED(atlas_texels[1], k);
+    if (n > 2) v.z = VXR_PAIRS_FILTERED(atlas_texels[2], k);
+    if (n > 3) v.w = VXR_PAIRS_FILTERED(atlas_texels[3], k);
+    return v * (1.0 / 255.0);
+  }
+  if (b == 2u) {
     const AtlasCorners k = atlas_corners(g_atlas_origin + pos);
     vec4 v = vec4(VXR_FILTERED(atlas_texels[0], k), 0.0, 0.0, 0.0);
     if (n > 1) v.y = VXR_FILTERED(atlas_texels[1], k);
     if (n > 2) v.z = VXR_FILTERED(atlas_texels[2], k);
     if (n > 3) v.w = VXR_FILTERED(atlas_texels[3], k);
-    return v * (b == 2u ? 1.0 / 65535.0 : 1.0 / 255.0);
+    return v * (1.0 / 65535.0);
   }
   const vec3 uvw = (g_atlas_origin + pos) * p.atlas_inv.xyz;
   // Constant indices only: dynamic indexing of sampler arrays needs a feature.

@@ -621,6 +621,41 @@ TEST_CASE("brick features: a slot filled from apron-1 chunks and their neighbour
   }
 }
 
+TEST_CASE("brick features: u8 atlases read by hand hold texel pairs, each slot row as (x, x + 1)") {
+  // The rays load a filter row (texel x and x + 1) as one 16-bit element
+  // (BrickPool texel_pairs); the row's last texel is paired with itself.
+  const uint8_t row[3] = {7, 9, 200};
+  uint8_t pairs[6];
+  write_texel_pairs(row, 3, pairs);
+  CHECK(std::vector<uint8_t>(pairs, pairs + 6) == std::vector<uint8_t>{7, 9, 9, 200, 200, 200});
+  test::GpuTestScope scope;
+  auto src = mri(2);
+  BrickPoolOptions o;
+  o.slots = {2, 2, 2};
+  auto made = BrickPool::create(test::gpu_context(), *src, o);
+  REQUIRE(made.is_ok());
+  BrickPool& pool = **made;
+  // Texel views (and so pairs) on a CPU device only; GPUs sample.
+  CHECK(pool.pairs() == test::gpu_context().info().is_cpu());
+  if (!pool.pairs()) return;
+  const uint32_t e = pool.slot_edge();
+  CHECK(pool.atlas().extent.width == 2 * 2 * e);
+  const ChunkKey k{0, 5, 7, 1};
+  REQUIRE(pool.upload({k}, 1 << 20).is_ok());
+  std::vector<uint8_t> texels(size_t(e) * e * e), want(2 * e);
+  REQUIRE(pool.fill_slot(k, texels.data()).is_ok());
+  const glm::uvec3 at = pool.touch(k) - glm::uvec3(pool.apron());
+  const gpu::Image& a = pool.atlas();
+  for (uint32_t z : {0u, e / 2, e - 1})
+    for (uint32_t y : {0u, e - 1}) {
+      CAPTURE(z);
+      CAPTURE(y);
+      write_texel_pairs(&texels[(size_t(z) * e + y) * e], e, want.data());
+      const uint8_t* got = a.mapped + (at.z + z) * a.depth_pitch + (at.y + y) * a.row_pitch + size_t(at.x) * 2;
+      CHECK(std::vector<uint8_t>(got, got + 2 * e) == want);
+    }
+}
+
 TEST_CASE("brick features: cut plane and ROI together match the CPU reference (golden)") {
   auto src = mri();
   Case c = mri_case(*src, "brick_cut_roi", test::mri_settings(OpticalModel::kEmissionAbsorption, "hot"),

@@ -167,7 +167,10 @@ TEST_CASE("brick render: the rays' own filter over texel views matches the sampl
   auto made = BrickRenderer::create(test::gpu_context(), *src, o);
   REQUIRE(made.is_ok());
   auto sampled = std::move(made).value();
-  if (test::gpu_context().info().type == VK_PHYSICAL_DEVICE_TYPE_CPU) CHECK(hand->pool().atlas_texels_view() != nullptr);
+  if (test::gpu_context().info().type == VK_PHYSICAL_DEVICE_TYPE_CPU) {
+    CHECK(hand->pool().atlas_texels_view() != nullptr);
+    CHECK(hand->pool().pairs());  // u8: texel pairs, 4 loads a sample
+  }
   CHECK(sampled->pool().atlas_texels_view() == nullptr);
   const Camera cam = orbit_camera(hand->placement(), 30, 25, 1.25);
   BrickFrameSettings f;

@@ -21,6 +21,13 @@ VkFormat brick_texel_format(DType dtype) {
   }
 }
 
+void write_texel_pairs(const uint8_t* row, uint32_t n, uint8_t* out) {
+  for (uint32_t x = 0; x < n; ++x) {
+    out[2 * x] = row[x];
+    out[2 * x + 1] = row[x + 1 < n ? x + 1 : x];
+  }
+}
+
 double brick_value_scale(DType dtype) {
   switch (dtype) {
     case DType::kU8: return 255.0;
@@ -220,28 +227,34 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   // Texel views (see above): a CPU device with direct writes.
   const bool want_views = options.texel_views && options.direct_writes && p->texel_bytes_ <= 2 &&
                           ctx.info().is_cpu();
+  // Texel pairs take twice the bytes (and width) per atlas texel.
+  const uint32_t stored = want_views && texel_pairs(format) ? 2 : 1;
+  const uint64_t view_bytes =
+      uint64_t(ctx.limits().maxTexelBufferElements) * gpu::format_texel_bytes(kAtlasTexelElement);
   if (auto_slots) {
     // Halve the largest axis until the atlases fit (at least 2 x 2 x 2), and
     // with texel views until each atlas fits one view.
-    const uint64_t view_bytes =
-        uint64_t(ctx.limits().maxTexelBufferElements) * gpu::format_texel_bytes(kAtlasTexelElement);
     slots = {16, 16, 8};
-    while ((uint64_t(slots.x) * slots.y * slots.z * p->brick_bytes_ > options.auto_atlas_bytes ||
-            (want_views && uint64_t(slots.x) * slots.y * slots.z * p->channel_bytes_ > view_bytes)) &&
+    while ((uint64_t(slots.x) * slots.y * slots.z * p->brick_bytes_ * stored > options.auto_atlas_bytes ||
+            (want_views && uint64_t(slots.x) * slots.y * slots.z * p->channel_bytes_ * stored > view_bytes)) &&
            slots.x * slots.y * slots.z > 8) {
       uint32_t& a = slots.x >= slots.y && slots.x >= slots.z ? slots.x : slots.y >= slots.z ? slots.y : slots.z;
       a /= 2;
     }
   }
   // Lowered further to fit the device, so containers with wide chunks (up to 512 + apron) still draw.
-  VXR_ASSIGN_OR_RETURN(slots, fit_slots(slots, p->edge_, p->texel_bytes_ * nch, ctx.limits().maxImageDimension3D,
-                                        kMaxAtlasBytes));
+  VXR_ASSIGN_OR_RETURN(slots, fit_slots(slots, p->edge_, p->texel_bytes_ * nch * stored,
+                                        ctx.limits().maxImageDimension3D / stored, kMaxAtlasBytes));
   p->slots_ = slots;
   const uint64_t ext[3] = {uint64_t(slots.x) * p->edge_, uint64_t(slots.y) * p->edge_, uint64_t(slots.z) * p->edge_};
   // The ring must hold at least one brick, however wide the container's chunks are.
   const uint64_t staging_bytes = std::max(options.staging_bytes, p->brick_bytes_);
-  const VkExtent3D extent{uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])};
   const VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  // Pairs where each atlas fits one view and the wide image maps; else the texels as they are.
+  const VkExtent3D paired{uint32_t(ext[0] * 2), uint32_t(ext[1]), uint32_t(ext[2])};
+  p->pairs_ = stored == 2 && ext[0] * ext[1] * ext[2] * 2 <= view_bytes &&
+              gpu::host_mapped_image_supported(ctx, VK_IMAGE_TYPE_3D, format, usage, paired);
+  const VkExtent3D extent = p->pairs_ ? paired : VkExtent3D{uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])};
   p->direct_ = options.direct_writes && gpu::host_mapped_image_supported(ctx, VK_IMAGE_TYPE_3D, format, usage, extent);
   for (uint32_t c = 0; c < nch; ++c) {
     gpu::ImageCreateInfo ii{VK_IMAGE_TYPE_3D, format, extent, usage, "brick atlas"};
@@ -265,9 +278,11 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
     p->scratch_.resize(p->brick_bytes_);
     // All atlases or none: the rays read every channel the same way.
     for (const gpu::Image& atlas : p->atlases_) {
-      if (!want_views) break;
+      if (!want_views || (texel_pairs(format) && !p->pairs_)) break;  // u8 texels are read by hand in pairs only
       Result<gpu::ImageTexels> w = gpu::create_image_texels(ctx, atlas, kAtlasTexelElement);
       if (!w.is_ok()) {
+        // Pairs are only read through views; a sampler would read them as texels.
+        if (p->pairs_) return internal_error("brick pool: texel pairs without a view: " + w.status().message());
         p->texel_views_.clear();
         break;
       }
@@ -553,11 +568,15 @@ void BrickPool::write_slot(uint32_t c, uint32_t slot, const uint8_t* texels) {
   // frames that drew it, so nothing on the device reads these texels now.
   const gpu::Image& atlas = atlases_[c];
   const glm::uvec3 o = slot_origin(slot) - glm::uvec3(apron_);
-  const size_t row = size_t(edge_) * texel_bytes_;
+  const size_t row = size_t(edge_) * texel_bytes_, stored = pairs_ ? 2 : 1;
   for (uint32_t z = 0; z < edge_; ++z)
-    for (uint32_t y = 0; y < edge_; ++y)
-      std::memcpy(atlas.mapped + (o.z + z) * atlas.depth_pitch + (o.y + y) * atlas.row_pitch + size_t(o.x) * texel_bytes_,
-                  texels + (size_t(z) * edge_ + y) * row, row);
+    for (uint32_t y = 0; y < edge_; ++y) {
+      uint8_t* to = atlas.mapped + (o.z + z) * atlas.depth_pitch + (o.y + y) * atlas.row_pitch +
+                    size_t(o.x) * texel_bytes_ * stored;
+      const uint8_t* from = texels + (size_t(z) * edge_ + y) * row;
+      if (pairs_) write_texel_pairs(from, edge_, to);
+      else std::memcpy(to, from, row);
+    }
 }
 
 void BrickPool::record_copies(VkCommandBuffer cmd, const std::vector<std::vector<VkBufferImageCopy>>& regions) {

@@ -42,7 +42,10 @@
 // those by hand instead of calling the sampler, which on lavapipe costs
 // several times a trilinear filter written in the shader
 // (docs/skipping-perf.md, tenth round). The automatic slot grid then keeps
-// each atlas within one view (maxTexelBufferElements elements).
+// each atlas within one view (maxTexelBufferElements elements). A u8 atlas
+// read that way holds texel pairs (write_texel_pairs): twice as wide, so
+// one element is a texel and its +x neighbour, and a filter row is one load
+// (eleventh round).
 #pragma once
 
 #include <functional>
@@ -87,6 +90,13 @@ struct BrickPoolOptions {
 // (32-bit elements take a gather instruction, slower on the machines
 // measured); a u8 texel is half of one.
 constexpr VkFormat kAtlasTexelElement = VK_FORMAT_R16_UINT;
+
+// u8 texels read by hand are stored in pairs: element x of a row (16 bits,
+// little-endian) holds texel x and texel x + 1, the row's last texel twice.
+// The image keeps its R8_UNORM format at twice the width, and is never sampled.
+inline bool texel_pairs(VkFormat texel_format) { return texel_format == VK_FORMAT_R8_UNORM; }
+// `n` u8 texels of a row -> 2n bytes of pairs.
+void write_texel_pairs(const uint8_t* row, uint32_t n, uint8_t* out);
 
 // Largest set of atlases create() makes: lavapipe has one 2 GiB heap; leave room for the rest.
 constexpr uint64_t kMaxAtlasBytes = (1ull << 31) - (64ull << 20);
@@ -183,6 +193,8 @@ class BrickPool {
   Status fill_slot(const ChunkKey& key, uint8_t* out) const;
   uint32_t slot_edge() const { return edge_; }
   uint32_t texel_bytes() const { return texel_bytes_; }
+  // The atlases hold texel pairs (texel_pairs; only with texel views).
+  bool pairs() const { return pairs_; }
 
   const gpu::Image& atlas(uint32_t channel = 0) const { return atlases_[channel]; }
   // The layout the atlases are sampled in (GENERAL with direct writes).
@@ -258,6 +270,7 @@ class BrickPool {
   glm::uvec3 slots_{0};
   uint32_t edge_ = 0, apron_ = 0;
   uint32_t texel_bytes_ = 1;
+  bool pairs_ = false;
   uint64_t channel_bytes_ = 0;  // one brick, one channel
   uint64_t brick_bytes_ = 0;
   std::vector<gpu::Image> atlases_;

@@ -592,8 +592,11 @@ BrickRenderer::AtlasReads BrickRenderer::reads_of(const gpu::Image& a, bool by_h
   AtlasReads r;
   r.texels = {a.extent.width, a.extent.height, a.extent.depth};
   if (by_hand) {
+    // 1: u8 texels in pairs (texel_pairs: the image is twice as wide), 2: u16.
     r.texel_bytes = gpu::format_texel_bytes(a.format);
-    r.pitch = {uint32_t(a.row_pitch / r.texel_bytes), uint32_t(a.depth_pitch / r.texel_bytes)};
+    if (texel_pairs(a.format)) r.texels.x /= 2;
+    const uint32_t element = gpu::format_texel_bytes(kAtlasTexelElement);  // pitches in view elements
+    r.pitch = {uint32_t(a.row_pitch / element), uint32_t(a.depth_pitch / element)};
   }
   return r;
 }
@@ -1414,11 +1417,16 @@ Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
   const uint32_t cs = src_.chunk_size(), a = src_.apron(), e = cs + 2 * a;
   std::vector<gpu::Image> textures;
   std::vector<gpu::ImageTexels> views;
-  const VkExtent3D extent{uint32_t(nx), uint32_t(ny), uint32_t(nz)};
+  const VkExtent3D plain{uint32_t(nx), uint32_t(ny), uint32_t(nz)}, paired{uint32_t(nx) * 2, plain.height, plain.depth};
   const VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  // Read as the pool's atlases are (by hand through texel views, or sampled), so both paths agree.
-  const bool host_mapped = pool_->atlas_texels_view() && tb <= 2 &&
-                           gpu::host_mapped_image_supported(ctx_, VK_IMAGE_TYPE_3D, format, usage, extent);
+  // Read as the pool's atlases are (by hand through texel views, u8 in
+  // pairs, or sampled), so both paths agree; sampled where that does not fit.
+  const bool by_hand = pool_->atlas_texels_view() != nullptr;
+  const bool pairs = by_hand && pool_->pairs() && paired.width <= max3d &&
+                     gpu::host_mapped_image_supported(ctx_, VK_IMAGE_TYPE_3D, format, usage, paired);
+  const bool host_mapped = pairs || (by_hand && tb == 2 && gpu::host_mapped_image_supported(
+                                                                  ctx_, VK_IMAGE_TYPE_3D, format, usage, plain));
+  const VkExtent3D extent = pairs ? paired : plain;
   for (uint32_t c = 0; c < channels(); ++c) {
     std::vector<uint8_t> dense(nx * ny * nz * sb);  // native voxels, then converted like the pool's
     for (uint32_t cz = 0; cz < li.chunk_counts[2]; ++cz)
@@ -1435,6 +1443,11 @@ Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
         }
     std::vector<uint8_t> texels(nx * ny * nz * tb);
     convert_to_texels(dtype, dense.data(), nx * ny * nz, texels.data());
+    if (pairs) {
+      std::vector<uint8_t> rows(texels.size() * 2);
+      for (uint64_t r = 0; r < ny * nz; ++r) write_texel_pairs(&texels[r * nx], uint32_t(nx), &rows[r * nx * 2]);
+      texels = std::move(rows);
+    }
     gpu::ImageCreateInfo ii{VK_IMAGE_TYPE_3D, format, extent, usage, "monolithic volume"};
     ii.host_mapped = host_mapped;
     VXR_ASSIGN_OR_RETURN(gpu::Image tex, gpu::create_image(ctx_, ii));
@@ -1442,6 +1455,8 @@ Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
     if (host_mapped) {
       Result<gpu::ImageTexels> view = gpu::create_image_texels(ctx_, tex, kAtlasTexelElement);
       if (view.is_ok()) views.push_back(std::move(*view));
+      // Pairs are only read through views; a sampler would read them as texels.
+      else if (pairs) return unsupported("monolithic: texel pairs without a view: " + view.status().message());
     }
     textures.push_back(std::move(tex));
   }
