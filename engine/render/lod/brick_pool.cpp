@@ -232,15 +232,17 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   const uint64_t view_bytes =
       uint64_t(ctx.limits().maxTexelBufferElements) * gpu::format_texel_bytes(kAtlasTexelElement);
   if (auto_slots) {
-    // Halve the largest axis until the atlases fit (at least 2 x 2 x 2), and
-    // with texel views until each atlas fits one view.
+    // Halve the largest axis until the atlases fit (at least 2 x 2 x 2); with
+    // texel views then lower it by one until each atlas fits one view (a u8
+    // or u16 slot of 68^3 in lavapipe's 128 Mi elements: 7 x 7 x 8 slots,
+    // where halving would leave 4 x 8 x 8).
     slots = {16, 16, 8};
-    while ((uint64_t(slots.x) * slots.y * slots.z * p->brick_bytes_ * stored > options.auto_atlas_bytes ||
-            (want_views && uint64_t(slots.x) * slots.y * slots.z * p->channel_bytes_ * stored > view_bytes)) &&
-           slots.x * slots.y * slots.z > 8) {
-      uint32_t& a = slots.x >= slots.y && slots.x >= slots.z ? slots.x : slots.y >= slots.z ? slots.y : slots.z;
-      a /= 2;
-    }
+    const auto count = [&] { return uint64_t(slots.x) * slots.y * slots.z; };
+    auto largest = [&]() -> uint32_t& {
+      return slots.x >= slots.y && slots.x >= slots.z ? slots.x : slots.y >= slots.z ? slots.y : slots.z;
+    };
+    while (count() * p->brick_bytes_ * stored > options.auto_atlas_bytes && count() > 8) largest() /= 2;
+    while (want_views && count() * p->channel_bytes_ * stored > view_bytes && count() > 8) --largest();
   }
   // Lowered further to fit the device, so containers with wide chunks (up to 512 + apron) still draw.
   VXR_ASSIGN_OR_RETURN(slots, fit_slots(slots, p->edge_, p->texel_bytes_ * nch * stored,
