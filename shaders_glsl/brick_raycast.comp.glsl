@@ -198,25 +198,26 @@ float vxr_pair_row(uint pair, float fx) { return mix(float(pair & 0xffu), float(
   mix(mix(VXR_PAIR_ROW(IMG, k.t000, k), VXR_PAIR_ROW(IMG, k.t010, k), k.f.y),                       \
       mix(VXR_PAIR_ROW(IMG, k.t001, k), VXR_PAIR_ROW(IMG, k.t011, k), k.f.y), k.f.z)
 
+// v.x .. v.w (up to the channel count) = FILTER over each channel's view.
+#define VXR_EACH_CHANNEL(v, FILTER, k)                       \
+  v.x = FILTER(atlas_texels[0], k);                          \
+  if (VXR_SC_CHANNELS > 1) v.y = FILTER(atlas_texels[1], k); \
+  if (VXR_SC_CHANNELS > 2) v.z = FILTER(atlas_texels[2], k); \
+  if (VXR_SC_CHANNELS > 3) v.w = FILTER(atlas_texels[3], k);
+
 vec4 vxr_sample(vec3 pos) {
   const int n = VXR_SC_CHANNELS;
   const uint b = VXR_SC_TEXEL_BYTES;
-  // UNORM: the stored integers filtered, then scaled once.
-  if (b == 1u) {
+  if (b != 0u) {
+    // UNORM: the stored integers filtered, then scaled once.
     const AtlasCorners k = atlas_corners(g_atlas_origin + pos);
-    vec4 v = vec4(VXR_PAIRS_FILTERED(atlas_texels[0], k), 0.0, 0.0, 0.0);
-    if (n > 1) v.y = VXR_PAIRS_FILTERED(atlas_texels[1], k);
-    if (n > 2) v.z = VXR_PAIRS_FILTERED(atlas_texels[2], k);
-    if (n > 3) v.w = VXR_PAIRS_FILTERED(atlas_texels[3], k);
-    return v * (1.0 / 255.0);
-  }
-  if (b == 2u) {
-    const AtlasCorners k = atlas_corners(g_atlas_origin + pos);
-    vec4 v = vec4(VXR_FILTERED(atlas_texels[0], k), 0.0, 0.0, 0.0);
-    if (n > 1) v.y = VXR_FILTERED(atlas_texels[1], k);
-    if (n > 2) v.z = VXR_FILTERED(atlas_texels[2], k);
-    if (n > 3) v.w = VXR_FILTERED(atlas_texels[3], k);
-    return v * (1.0 / 65535.0);
+    vec4 v = vec4(0.0);
+    if (b == 1u) {
+      VXR_EACH_CHANNEL(v, VXR_PAIRS_FILTERED, k)
+    } else {
+      VXR_EACH_CHANNEL(v, VXR_FILTERED, k)
+    }
+    return v * (b == 2u ? 1.0 / 65535.0 : 1.0 / 255.0);
   }
   const vec3 uvw = (g_atlas_origin + pos) * p.atlas_inv.xyz;
   // Constant indices only: dynamic indexing of sampler arrays needs a feature.

@@ -88,7 +88,7 @@ struct BrickPoolOptions {
 
 // The texel views' element: 16 bits, which lavapipe loads lane by lane
 // (32-bit elements take a gather instruction, slower on the machines
-// measured); a u8 texel is half of one.
+// measured): a u16 texel, or a pair of u8 texels (texel_pairs).
 constexpr VkFormat kAtlasTexelElement = VK_FORMAT_R16_UINT;
 
 // u8 texels read by hand are stored in pairs: element x of a row (16 bits,
