@@ -209,9 +209,6 @@ class BrickPool {
   uint32_t channels() const { return static_cast<uint32_t>(atlases_.size()); }
   uint32_t source_channel(uint32_t i) const { return channel_map_[i]; }
   uint32_t apron() const { return apron_; }
-  glm::uvec3 atlas_texels() const {
-    return {atlases_[0].extent.width, atlases_[0].extent.height, atlases_[0].extent.depth};
-  }
   uint32_t capacity() const { return uint32_t(slots_.x) * slots_.y * slots_.z; }
   uint32_t used() const { return static_cast<uint32_t>(map_.size()); }
   uint64_t brick_bytes() const { return brick_bytes_; }  // one brick, every channel

@@ -277,9 +277,9 @@ class BrickRenderer final : public VolumeRenderer {
   Atlases mono_atlases() const;  // set_monolithic's
   // What the rays need to read them (record_cast).
   struct AtlasReads {
-    glm::uvec3 texels{0};      // the atlas's size
-    uint32_t texel_bytes = 0;  // hand filtering (constant 115): 1 or 2; 0: the sampler
-    glm::uvec2 pitch{0};       // row and slice pitch in texels (hand filtering)
+    glm::uvec3 texels{0};      // the atlas's size in texels (a paired atlas's image is twice as wide)
+    uint32_t texel_bytes = 0;  // hand filtering (constant 115): 1 (u8 in pairs) or 2 (u16); 0: the sampler
+    glm::uvec2 pitch{0};       // row and slice pitch in view elements (hand filtering)
   };
   // Of atlas `a` (channel 0's; the others share its layout), read by hand through texel views or sampled.
   static AtlasReads reads_of(const gpu::Image& a, bool by_hand);
