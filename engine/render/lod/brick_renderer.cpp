@@ -1422,43 +1422,55 @@ Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
   // Read as the pool's atlases are (by hand through texel views, u8 in
   // pairs, or sampled), so both paths agree; sampled where that does not fit.
   const bool by_hand = pool_->atlas_texels_view() != nullptr;
+  // Every channel's texture and, read by hand, its view; false where pairs
+  // get no view (the driver's padded rows outgrow one).
+  const auto build = [&](bool pairs) -> Result<bool> {
+    views.clear();  // before the textures whose memory they view
+    textures.clear();
+    const bool host_mapped = pairs || (by_hand && tb == 2 && gpu::host_mapped_image_supported(
+                                                                    ctx_, VK_IMAGE_TYPE_3D, format, usage, plain));
+    const VkExtent3D extent = pairs ? paired : plain;
+    for (uint32_t c = 0; c < channels(); ++c) {
+      std::vector<uint8_t> dense(nx * ny * nz * sb);  // native voxels, then converted like the pool's
+      for (uint32_t cz = 0; cz < li.chunk_counts[2]; ++cz)
+        for (uint32_t cy = 0; cy < li.chunk_counts[1]; ++cy)
+          for (uint32_t cx = 0; cx < li.chunk_counts[0]; ++cx) {
+            VXR_ASSIGN_OR_RETURN(auto chunk, src_.read({level, cx, cy, cz, pool_->source_channel(c), timepoint}));
+            for (uint32_t z = 0; z < cs && uint64_t(cz) * cs + z < nz; ++z)
+              for (uint32_t y = 0; y < cs && uint64_t(cy) * cs + y < ny; ++y) {
+                const uint64_t gx = uint64_t(cx) * cs, gy = uint64_t(cy) * cs + y, gz = uint64_t(cz) * cs + z;
+                const uint64_t n = std::min<uint64_t>(cs, nx - gx);
+                std::memcpy(&dense[((gz * ny + gy) * nx + gx) * sb],
+                            &chunk->data[((uint64_t(z + a) * e + (y + a)) * e + a) * sb], n * sb);
+              }
+          }
+      std::vector<uint8_t> texels(nx * ny * nz * tb);
+      convert_to_texels(dtype, dense.data(), nx * ny * nz, texels.data());
+      if (pairs) {
+        std::vector<uint8_t> rows(texels.size() * 2);
+        for (uint64_t r = 0; r < ny * nz; ++r) write_texel_pairs(&texels[r * nx], uint32_t(nx), &rows[r * nx * 2]);
+        texels = std::move(rows);
+      }
+      gpu::ImageCreateInfo ii{VK_IMAGE_TYPE_3D, format, extent, usage, "monolithic volume"};
+      ii.host_mapped = host_mapped;
+      VXR_ASSIGN_OR_RETURN(gpu::Image tex, gpu::create_image(ctx_, ii));
+      VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, tex, texels.data(), texels.size()));
+      if (host_mapped) {
+        Result<gpu::ImageTexels> view = gpu::create_image_texels(ctx_, tex, kAtlasTexelElement);
+        if (view.is_ok()) views.push_back(std::move(*view));
+        // Pairs are only read through views; a sampler would read them as texels.
+        else if (pairs) return false;
+      }
+      textures.push_back(std::move(tex));
+    }
+    return true;
+  };
   const bool pairs = by_hand && pool_->pairs() && paired.width <= max3d &&
                      gpu::host_mapped_image_supported(ctx_, VK_IMAGE_TYPE_3D, format, usage, paired);
-  const bool host_mapped = pairs || (by_hand && tb == 2 && gpu::host_mapped_image_supported(
-                                                                  ctx_, VK_IMAGE_TYPE_3D, format, usage, plain));
-  const VkExtent3D extent = pairs ? paired : plain;
-  for (uint32_t c = 0; c < channels(); ++c) {
-    std::vector<uint8_t> dense(nx * ny * nz * sb);  // native voxels, then converted like the pool's
-    for (uint32_t cz = 0; cz < li.chunk_counts[2]; ++cz)
-      for (uint32_t cy = 0; cy < li.chunk_counts[1]; ++cy)
-        for (uint32_t cx = 0; cx < li.chunk_counts[0]; ++cx) {
-          VXR_ASSIGN_OR_RETURN(auto chunk, src_.read({level, cx, cy, cz, pool_->source_channel(c), timepoint}));
-          for (uint32_t z = 0; z < cs && uint64_t(cz) * cs + z < nz; ++z)
-            for (uint32_t y = 0; y < cs && uint64_t(cy) * cs + y < ny; ++y) {
-              const uint64_t gx = uint64_t(cx) * cs, gy = uint64_t(cy) * cs + y, gz = uint64_t(cz) * cs + z;
-              const uint64_t n = std::min<uint64_t>(cs, nx - gx);
-              std::memcpy(&dense[((gz * ny + gy) * nx + gx) * sb],
-                          &chunk->data[((uint64_t(z + a) * e + (y + a)) * e + a) * sb], n * sb);
-            }
-        }
-    std::vector<uint8_t> texels(nx * ny * nz * tb);
-    convert_to_texels(dtype, dense.data(), nx * ny * nz, texels.data());
-    if (pairs) {
-      std::vector<uint8_t> rows(texels.size() * 2);
-      for (uint64_t r = 0; r < ny * nz; ++r) write_texel_pairs(&texels[r * nx], uint32_t(nx), &rows[r * nx * 2]);
-      texels = std::move(rows);
-    }
-    gpu::ImageCreateInfo ii{VK_IMAGE_TYPE_3D, format, extent, usage, "monolithic volume"};
-    ii.host_mapped = host_mapped;
-    VXR_ASSIGN_OR_RETURN(gpu::Image tex, gpu::create_image(ctx_, ii));
-    VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, tex, texels.data(), texels.size()));
-    if (host_mapped) {
-      Result<gpu::ImageTexels> view = gpu::create_image_texels(ctx_, tex, kAtlasTexelElement);
-      if (view.is_ok()) views.push_back(std::move(*view));
-      // Pairs are only read through views; a sampler would read them as texels.
-      else if (pairs) return unsupported("monolithic: texel pairs without a view: " + view.status().message());
-    }
-    textures.push_back(std::move(tex));
+  bool built = false;
+  VXR_ASSIGN_OR_RETURN(built, build(pairs));
+  if (!built) {
+    VXR_ASSIGN_OR_RETURN(built, build(false));  // the texels as they are, sampled
   }
   if (views.size() != textures.size()) views.clear();  // every channel by hand, or none
   mono_texels_.clear();  // before the textures whose memory they view
