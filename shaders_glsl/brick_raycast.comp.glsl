@@ -70,9 +70,10 @@ layout(binding = 12, rgba32f) uniform readonly imageBuffer transfer_rows;
 // ray (a storage buffer has one): the MRI's E-A frame at step 0.5 took 172 ->
 // 158 ms (`vxr bench peer`).
 layout(std140, binding = 14) uniform CellBitsWindow { uvec4 cell_bits_window[VXR_CELL_BITS_WINDOW_WORDS / 4u]; };
-// The start of this view's records of binding 4 again, as a uniform buffer
-// (specialisation constant 108; see brick_record).
-layout(std140, binding = 15) uniform BrickWindow { BrickRecord brick_window[VXR_BRICK_WINDOW_RECORDS]; };
+// The brick table (binding 4, every view's records) again as RGBA32F texels,
+// 6 a record, this view's from p.records.x (specialisation constant 108; see
+// brick_record).
+layout(binding = 15, rgba32f) uniform readonly imageBuffer record_texels;
 
 // Each atlas's texels as 16-bit elements (BrickPool texel views) for the
 // rays' own trilinear filter (specialisation constant 115); without views,
@@ -93,13 +94,14 @@ layout(constant_id = 106) const bool VXR_SC_CELLS = true;
 // VXR_SAMPLE_*: anything but SHADE is a benchmark's probe (shared/brick_params.h);
 // its pixels show what the probe summed, not an image.
 layout(constant_id = 107) const uint VXR_SC_SAMPLE_WORK = VXR_SAMPLE_SHADE;
-// The brick records through the uniform window (binding 15), set where the
-// view's records fit it: on lavapipe a storage buffer load loops over the
-// lanes with a branch per lane and component, a uniform one gathers. A
-// constant, not a flag: lavapipe runs both sides of a branch on a flag
-// (MRI E-A at steps 2 and 0.5: 59.1 and 123.8 ms against 61.8 and 128.0,
-// min of 6; with a flag, no gain).
-layout(constant_id = 108) const bool VXR_SC_RECORDS_UNIFORM = false;
+// The brick records as texels (binding 15), set where the device's texel
+// buffers hold the table: on lavapipe a storage buffer load loops over the
+// lanes with a branch per lane and component, a uniform buffer's in a loop
+// gathers each component lane by lane, a texel load takes a whole vec4 per
+// lane (MRI E-A at step 1: 39.8 ms against 41.1 through a uniform buffer,
+// docs/skipping-perf.md, twelfth round). A constant, not a flag: lavapipe
+// runs both sides of a branch on a flag.
+layout(constant_id = 108) const bool VXR_SC_RECORD_TEXELS = false;
 // The cell tests' emptiness bits through their uniform window (binding 14),
 // set where the view's bits fit it (a flag cost 1-2%: both sides ran).
 layout(constant_id = 109) const bool VXR_SC_CELL_BITS_UNIFORM = false;
@@ -130,8 +132,16 @@ layout(constant_id = 115) const uint VXR_SC_TEXEL_BYTES = 0u;
 
 // Brick b's record, read once per brick a ray enters.
 BrickRecord brick_record(uint b) {
-  if (VXR_SC_RECORDS_UNIFORM) return brick_window[b];  // (a ?: of the two block types is not valid SPIR-V)
-  return bricks[b];
+  if (!VXR_SC_RECORD_TEXELS) return bricks[b];
+  const int at = int(p.records.x + b * 6u);
+  BrickRecord r;
+  r.eye = imageLoad(record_texels, at);
+  r.scale = imageLoad(record_texels, at + 1);
+  r.box_lo = imageLoad(record_texels, at + 2);
+  r.box_hi = imageLoad(record_texels, at + 3);
+  r.atlas = imageLoad(record_texels, at + 4);
+  r.plane = imageLoad(record_texels, at + 5);
+  return r;
 }
 
 // The ray's unit direction in level-0 voxels: samples are taken in the brick's

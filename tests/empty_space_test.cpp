@@ -471,7 +471,7 @@ TEST_CASE("empty-space cells: the cell bits, keys and brick records read through
   test::GpuTestScope scope;
   BrickRendererOptions uniform, storage;
   storage.uniform_cell_bits = false;
-  storage.uniform_brick_records = false;
+  storage.texel_brick_records = false;
   storage.texel_cell_keys = false;
   for (const VariantFrames& v : vessel_variants(
            uniform, storage, {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip})) {

@@ -35,10 +35,6 @@ using uvec4 = glm::uvec4;
 // emptiness bits in binding 13, read where specialisation constant 109 says):
 // 4096 uvec4, 64 KiB.
 #define VXR_CELL_BITS_WINDOW_WORDS 16384u
-// Binding 15's declared size (a uniform buffer over this view's records of
-// binding 4, read where specialisation constant 108 says): 680 records of 96
-// bytes, just under 64 KiB.
-#define VXR_BRICK_WINDOW_RECORDS 680u
 
 // What each sample does (specialisation constant 107, VXR_SC_SAMPLE_WORK):
 // the optical model, or for `vxr bench roofline`'s split of an E-A frame's
@@ -76,11 +72,14 @@ struct BrickCastParams {
   // (specialisation constant 115): x, y: row and slice pitch in texels; z:
   // the last texel along x and y (x | y << 16), w: along z.
   uvec4 texels;
+  // x: the view's first brick record as a texel of binding 15 (the brick
+  // table as RGBA32F texels, 6 a record; specialisation constant 108).
+  uvec4 records;
 };
 
 #ifdef __cplusplus
 static_assert(sizeof(BrickRecord) == 96, "brick record layout");
-static_assert(sizeof(BrickCastParams) == 80, "push constants must stay within 128 bytes");
+static_assert(sizeof(BrickCastParams) == 96, "push constants must stay within 128 bytes");
 }  // namespace vxr::shader
 #endif
 

@@ -32,7 +32,7 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {12, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // transfer rows
       {13, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits
       {14, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell bits' window
-      {15, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // brick records' window
+      {15, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // brick records as texels
       {16, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell keys as texels
       {17, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, VXR_MAX_CHANNELS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // atlas texel views
   };
@@ -281,8 +281,17 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->tf_staging_, gpu::create_buffer(ctx, {tf_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                                                 gpu::MemoryIntent::kUpload, "transfer function staging"}));
   VXR_ASSIGN_OR_RETURN(r->table_, gpu::create_buffer(ctx, {uint64_t(options.max_bricks) * sizeof(shader::BrickRecord),
-                                                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                                               VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT,
                                                            gpu::MemoryIntent::kUpload, "brick table"}));
+  // The table as RGBA32F texels for the rays (binding 15): all of it where
+  // the device's texel buffers hold it (UniformWindows::record_texels), else
+  // a stand-in over its start that no ray reads.
+  const uint64_t table_texels = r->table_.size / sizeof(glm::vec4);
+  r->table_texels_fit_ = table_texels <= ctx.limits().maxTexelBufferElements;
+  VXR_ASSIGN_OR_RETURN(r->table_texels_,
+                       gpu::create_buffer_view(ctx, r->table_.buffer, VK_FORMAT_R32G32B32A32_SFLOAT, 0,
+                                               r->table_texels_fit_ ? r->table_.size : sizeof(glm::vec4)));
   VXR_ASSIGN_OR_RETURN(r->counters_, gpu::create_buffer(ctx, {16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                               gpu::MemoryIntent::kReadback, "brick counters"}));
   VXR_ASSIGN_OR_RETURN(r->items_, gpu::create_buffer(ctx, {uint64_t(options.max_work_items) * sizeof(glm::uvec4),
@@ -327,9 +336,9 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
     gpu::write_storage_buffer(ctx, set, 5, r->counters_.buffer);
     gpu::write_storage_buffer(ctx, set, 1, r->transfer_buf_.buffer);
     gpu::write_storage_texel_buffer(ctx, set, 12, r->transfer_rows_.get());
+    gpu::write_storage_texel_buffer(ctx, set, 15, r->table_texels_.get());
   }
   gpu::write_storage_buffer(ctx, r->mono_set_, 4, r->table_.buffer);
-  gpu::write_uniform_buffer(ctx, r->mono_set_, 15, r->table_.buffer, r->brick_window_bytes(0));
   gpu::write_storage_buffer(ctx, r->mono_set_, 6, r->items_.buffer);
   gpu::write_uniform_buffer(ctx, r->mono_set_, 7, r->params_.buffer, sizeof(shader::RaycastParams));
   VXR_RETURN_IF_ERROR(r->ensure_target(1, 1));  // the storage binding needs an image even when views blit
@@ -378,10 +387,6 @@ uint64_t BrickRenderer::window_bytes(uint64_t declared, const gpu::Buffer& buffe
 
 uint64_t BrickRenderer::cell_bits_window_bytes(uint64_t offset) const {
   return window_bytes(uint64_t(VXR_CELL_BITS_WINDOW_WORDS) * 4, cell_bits_, offset);
-}
-
-uint64_t BrickRenderer::brick_window_bytes(uint64_t offset) const {
-  return window_bytes(uint64_t(VXR_BRICK_WINDOW_RECORDS) * sizeof(shader::BrickRecord), table_, offset);
 }
 
 uint64_t BrickRenderer::cell_bits_align() const {
@@ -525,7 +530,7 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& 
       {105, v.naive_opacity},
       {106, v.cells},
       {107, uint32_t(v.work)},
-      {108, v.windows.records},
+      {108, v.windows.record_texels},
       {109, v.windows.cell_bits},
       {110, v.no_bricks},
       {111, v.windows.key_texels},
@@ -737,7 +742,7 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
 }
 
 Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
-                                  uint32_t w, uint32_t h, uint32_t bricks, const AtlasReads& atlas,
+                                  uint32_t w, uint32_t h, uint32_t bricks, uint64_t records, const AtlasReads& atlas,
                                   BrickPassMode mode, const WorkSpans& spans, const RenderTarget& target,
                                   CellWalk cell_walk, SampleWork work, CellClassInputs* classify,
                                   BrickFrameStats* stats) {
@@ -778,7 +783,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   // uniform windows when all of the view's fit (bindings 15 and 14 start at
   // the view's first); MIP / MinIP keys as texels where the device has enough.
   UniformWindows windows;
-  windows.records = opt_.uniform_brick_records && uint64_t(bricks) * sizeof(shader::BrickRecord) <= brick_window_bytes(0);
+  windows.record_texels = opt_.texel_brick_records && table_texels_fit_;
   windows.cell_bits = cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits && classify &&
                       bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes(classify->bits_offset);
   windows.key_texels = cells_per_axis > 0 && reduce && opt_.texel_cell_keys &&
@@ -790,6 +795,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(walk.cell_size));
   p.texels = glm::uvec4(atlas.pitch, (atlas_texels.x - 1) | (atlas_texels.y - 1) << 16, atlas_texels.z - 1);
+  p.records = glm::uvec4(uint32_t(records / sizeof(glm::vec4)), 0, 0, 0);
   if (target.warp_x.active() || target.warp_y.active())
     p.warp = glm::uvec4(target.warp_x.active() ? target.warp_x.edge_warped : 0u,
                         target.warp_y.active() ? target.warp_y.edge_warped : 0u,
@@ -1176,8 +1182,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   st.lod = lod.stats;
 
   // This view's slices of the frame's table and work list (offsets aligned for descriptors).
-  const VkDeviceSize salign = std::max<VkDeviceSize>({ctx_.limits().minStorageBufferOffsetAlignment,
-                                                      ctx_.limits().minUniformBufferOffsetAlignment, 16});
+  // 16 bytes at least: the records' first texel (binding 15) is the offset / 16.
+  const VkDeviceSize salign = std::max<VkDeviceSize>(ctx_.limits().minStorageBufferOffsetAlignment, 16);
   const VkDeviceSize table_base = align_up(table_used_, salign);
   const VkDeviceSize table_bytes = std::max<size_t>(lod.draw.size(), 1) * sizeof(shader::BrickRecord);
   if (table_base + table_bytes > table_.size)
@@ -1251,7 +1257,6 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   gpu::write_storage_image(ctx_, set, 9, target.under.present() ? target.under.depth : no_under_depth_.view.get());
   gpu::write_storage_image(ctx_, set, 10, target.under.present() ? target.under.color : no_under_color_.view.get());
   gpu::write_storage_buffer(ctx_, set, 4, table_.buffer, table_bytes, table_base);
-  gpu::write_uniform_buffer(ctx_, set, 15, table_.buffer, brick_window_bytes(table_base), table_base);
   gpu::write_storage_buffer(ctx_, set, 6, items_.buffer, items_bytes, items_base);
   gpu::write_uniform_buffer(ctx_, set, 7, params_.buffer, sizeof(shader::RaycastParams), params_offset);
   // This view's region of the cell bits (the finest walk's size): the rays
@@ -1282,7 +1287,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     if (opt_.cell_walk != BrickCellWalk::kAuto)
       walk = opt_.cell_walk == BrickCellWalk::kCells ? CellWalk::kCells : CellWalk::kGroups;
   }
-  VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),
+  VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()), table_base,
                                   reads_of(pool_->atlas(), pool_->atlas_texels_view() != nullptr), mode, spans, target,
                                   walk, frame.sample_work, &classify,
                                   &st));
@@ -1531,7 +1536,7 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
     std::memcpy(params_.mapped, &params, sizeof(params));
     gpu::write_storage_image(ctx_, mono_set_, 2, target_.view);
     gpu::write_storage_image(ctx_, mono_set_, 3, accum_.view);
-    recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, reads_of(mono_tex_.at(0), !mono_texels_.empty()),
+    recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, 0, reads_of(mono_tex_.at(0), !mono_texels_.empty()),
                            BrickPassMode::kSinglePass, {}, target, CellWalk::kOff, SampleWork::kShade, nullptr,
                            &st);
   }));

@@ -107,10 +107,10 @@ struct BrickRendererOptions {
   // through a storage buffer. False: always the storage buffer (tests pin
   // that both agree).
   bool uniform_cell_bits = true;
-  // The rays read the brick records through a uniform buffer while the
-  // view's records fit its range (680 records, or what the device allows),
-  // else through a storage buffer. False: always the storage buffer.
-  bool uniform_brick_records = true;
+  // The rays read the brick records as texels of the brick table where the
+  // device's texel buffers hold it, else through a storage buffer. False:
+  // always the storage buffer.
+  bool texel_brick_records = true;
   // MIP / MinIP cell tests read the keys as texels of a uniform texel
   // buffer where the device holds them all, else from the storage buffer.
   // False: always the storage buffer.
@@ -258,8 +258,6 @@ class BrickRenderer final : public VolumeRenderer {
   // The uniform window over the cell bits from `offset` (a view's region): 64 KiB or what the device allows.
   uint64_t cell_bits_window_bytes(uint64_t offset) const;
   uint64_t cell_bits_align() const;  // of a view's region: both its descriptors' offset alignments
-  // The uniform window over the brick records from `offset` (a view's first record): 680 records or what the device allows.
-  uint64_t brick_window_bytes(uint64_t offset) const;
   // Rebuilds the pool with `apron` (waits for the device; rebinds every set).
   Status rebuild_pool(uint32_t apron);
   // The frame's timepoint: its top level pinned (begin_frame, before any copy is recorded).
@@ -287,7 +285,7 @@ class BrickRenderer final : public VolumeRenderer {
   // storage buffer (brick_raycast.comp constants 108, 109, 111): where all of
   // a view's fit. lavapipe runs both sides of a branch, so it is a constant.
   struct UniformWindows {
-    bool records = false;    // the brick records (binding 15 over 4)
+    bool record_texels = false;  // the brick records as texels (15 over 4)
     bool cell_bits = false;  // the E-A and emission cells' emptiness bits (14 over 13)
     bool key_texels = false;  // the MIP / MinIP cells' keys as texels (16 over 11; constant 111)
   };
@@ -367,11 +365,13 @@ class BrickRenderer final : public VolumeRenderer {
     std::vector<glm::uvec2> waves;
     glm::uvec2 marched_tiles{0, 0}, empty_tiles{0, 0};
   };
-  // `model`: the packed parameters' VXR_MODEL_* (control.x). `classify`: the
-  // view's records, window, table and bits region (null: no cells walked);
-  // when they are new, they are swapped into the view's entry of classified_.
+  // `model`: the packed parameters' VXR_MODEL_* (control.x). `records`:
+  // where the view's brick records start in table_ (bytes, a multiple of
+  // 16). `classify`: the view's records, window, table and bits region (null:
+  // no cells walked); when they are new, they are swapped into the view's
+  // entry of classified_.
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
-                     uint32_t height, uint32_t bricks, const AtlasReads& atlas, BrickPassMode mode,
+                     uint32_t height, uint32_t bricks, uint64_t records, const AtlasReads& atlas, BrickPassMode mode,
                      const WorkSpans& spans, const RenderTarget& target, CellWalk cells,
                      SampleWork work, CellClassInputs* classify, BrickFrameStats* stats);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
@@ -407,6 +407,9 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<uint32_t> tile_rows_;  // build_tile_lists: the tile rows in dispatch order, kept while the height stays
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
+  // table_ as RGBA32F texels for the rays' record reads (declared after it: destroyed first).
+  gpu::Handle<VkBufferView> table_texels_;
+  bool table_texels_fit_ = false;  // table_texels_ covers the whole table
   // cell_keys_ as R32F texels, which the rays' MIP / MinIP key tests read (declared after it: destroyed first).
   gpu::Handle<VkBufferView> cell_key_texels_;
   std::vector<std::optional<CellClassInputs>> classified_;  // per view of a frame: what its pass left (none: unknown)
