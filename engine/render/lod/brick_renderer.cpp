@@ -779,9 +779,11 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   const uint32_t cells_per_axis = cells ? walk.cells_per_axis : 0u;
   if (!cells && stats) stats->bricks_walked = 0;  // record_view counted the bricks that would walk
   const uint32_t range_cells_per_axis = pool_->cells().cells_per_axis;
-  // The records, and the E-A and emission cell tests' bits, through their
-  // uniform windows when all of the view's fit (bindings 15 and 14 start at
-  // the view's first); MIP / MinIP keys as texels where the device has enough.
+  // The records as texels of the whole table where the device's texel
+  // buffers hold it (binding 15, the view's first at p.records.x); the E-A
+  // and emission cell tests' bits through their uniform window when all of
+  // the view's fit (binding 14 starts at the view's first); MIP / MinIP keys
+  // as texels where the device has enough.
   UniformWindows windows;
   windows.record_texels = opt_.texel_brick_records && table_texels_fit_;
   windows.cell_bits = cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits && classify &&
@@ -1287,10 +1289,9 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     if (opt_.cell_walk != BrickCellWalk::kAuto)
       walk = opt_.cell_walk == BrickCellWalk::kCells ? CellWalk::kCells : CellWalk::kGroups;
   }
-  VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()), table_base,
-                                  reads_of(pool_->atlas(), pool_->atlas_texels_view() != nullptr), mode, spans, target,
-                                  walk, frame.sample_work, &classify,
-                                  &st));
+  VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),
+                                  table_base, reads_of(pool_->atlas(), pool_->atlas_texels_view() != nullptr), mode,
+                                  spans, target, walk, frame.sample_work, &classify, &st));
   ++views_;
   table_used_ = table_base + table_bytes;
   items_used_ = items_base + items_bytes;
@@ -1536,9 +1537,9 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
     std::memcpy(params_.mapped, &params, sizeof(params));
     gpu::write_storage_image(ctx_, mono_set_, 2, target_.view);
     gpu::write_storage_image(ctx_, mono_set_, 3, accum_.view);
-    recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, 0, reads_of(mono_tex_.at(0), !mono_texels_.empty()),
-                           BrickPassMode::kSinglePass, {}, target, CellWalk::kOff, SampleWork::kShade, nullptr,
-                           &st);
+    recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, 0,
+                           reads_of(mono_tex_.at(0), !mono_texels_.empty()), BrickPassMode::kSinglePass, {}, target,
+                           CellWalk::kOff, SampleWork::kShade, nullptr, &st);
   }));
   VXR_RETURN_IF_ERROR(recorded);
   st.render_ms = ms_since(t0);
