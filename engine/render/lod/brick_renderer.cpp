@@ -255,7 +255,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   r->value_scales_.assign(r->pool_->channels(), brick_value_scale(source.info().dtype));
   const auto b = bindings();
   r->pipes_ = options.pipelines ? options.pipelines : std::make_shared<BrickPipelines>();
-  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant({.cells = true, .windows = {true, true}}));
+  VXR_ASSIGN_OR_RETURN(r->pipeline_, r->variant({.cells = true, .fast = {true, true}}));
   if (options.max_views == 0) return invalid_argument("brick renderer: max_views must be at least 1");
   VXR_ASSIGN_OR_RETURN(r->desc_pool_, gpu::create_descriptor_pool(ctx, b, options.max_views + 1));
   VXR_ASSIGN_OR_RETURN(r->mono_set_, gpu::allocate_descriptor_set(ctx, r->desc_pool_, r->pipeline_->set_layout));
@@ -285,7 +285,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
                                                                VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT,
                                                            gpu::MemoryIntent::kUpload, "brick table"}));
   // The table as RGBA32F texels for the rays (binding 15): all of it where
-  // the device's texel buffers hold it (UniformWindows::record_texels), else
+  // the device's texel buffers hold it (FastReads::record_texels), else
   // a stand-in over its start that no ray reads.
   const uint64_t table_texels = r->table_.size / sizeof(glm::vec4);
   r->table_texels_fit_ = table_texels <= ctx.limits().maxTexelBufferElements;
@@ -359,7 +359,7 @@ Status BrickRenderer::ensure_cell_keys() {
     VXR_ASSIGN_OR_RETURN(cell_keys_, gpu::create_buffer(ctx_, {key_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
                                                                               VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT,
                                                                gpu::MemoryIntent::kDeviceLocal, "brick cell keys"}));
-    // A device with fewer texels than keys reads them from the storage buffer (UniformWindows::key_texels).
+    // A device with fewer texels than keys reads them from the storage buffer (FastReads::key_texels).
     const uint64_t texels = std::min<uint64_t>(key_bytes / sizeof(float), ctx_.limits().maxTexelBufferElements);
     VXR_ASSIGN_OR_RETURN(cell_key_texels_, gpu::create_buffer_view(ctx_, cell_keys_.buffer, VK_FORMAT_R32_SFLOAT, 0,
                                                                    texels * sizeof(float)));
@@ -497,9 +497,9 @@ bool any_gamma(const RenderSettings& s, uint32_t channels) {
 }  // namespace
 
 Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model,
-                                                                uint32_t texel_bytes, bool cells, UniformWindows windows,
+                                                                uint32_t texel_bytes, bool cells, FastReads fast,
                                                                 SampleWork work, bool waves, bool no_bricks) {
-  ShaderVariant v{.model = model, .channels = channels(), .cells = cells, .windows = windows, .work = work,
+  ShaderVariant v{.model = model, .channels = channels(), .cells = cells, .fast = fast, .work = work,
                   .no_bricks = no_bricks, .waves = waves, .texel_bytes = texel_bytes};
   v.gradient = s.gradient_opacity.enabled;
   v.depth_color = s.depth_color != DepthColorMode::kOff;
@@ -530,10 +530,10 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& 
       {105, v.naive_opacity},
       {106, v.cells},
       {107, uint32_t(v.work)},
-      {108, v.windows.record_texels},
-      {109, v.windows.cell_bits},
+      {108, v.fast.record_texels},
+      {109, v.fast.cell_bits},
       {110, v.no_bricks},
-      {111, v.windows.key_texels},
+      {111, v.fast.key_texels},
       {112, v.composite ? uint32_t(VXR_BLEND_COMPOSITE) : uint32_t(VXR_BLEND_ADDITIVE)},
       {113, v.waves},
       {114, v.classify},
@@ -784,15 +784,15 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   // and emission cell tests' bits through their uniform window when all of
   // the view's fit (binding 14 starts at the view's first); MIP / MinIP keys
   // as texels where the device has enough.
-  UniformWindows windows;
-  windows.record_texels = opt_.texel_brick_records && table_texels_fit_;
-  windows.cell_bits = cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits && classify &&
-                      bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes(classify->bits_offset);
-  windows.key_texels = cells_per_axis > 0 && reduce && opt_.texel_cell_keys &&
-                       cell_keys_.size / sizeof(float) <= ctx_.limits().maxTexelBufferElements;
+  FastReads fast;
+  fast.record_texels = opt_.texel_brick_records && table_texels_fit_;
+  fast.cell_bits = cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits && classify &&
+                   bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes(classify->bits_offset);
+  fast.key_texels = cells_per_axis > 0 && reduce && opt_.texel_cell_keys &&
+                    cell_keys_.size / sizeof(float) <= ctx_.limits().maxTexelBufferElements;
   const gpu::ComputePipeline* pipe = nullptr;
   const bool waves = mode == BrickPassMode::kMultipass;
-  VXR_ASSIGN_OR_RETURN(pipe, pipeline_for(s, model, atlas.texel_bytes, cells, windows, work, waves));
+  VXR_ASSIGN_OR_RETURN(pipe, pipeline_for(s, model, atlas.texel_bytes, cells, fast, work, waves));
   const glm::uvec3& atlas_texels = atlas.texels;
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(walk.cell_size));

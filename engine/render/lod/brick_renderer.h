@@ -281,10 +281,11 @@ class BrickRenderer final : public VolumeRenderer {
   };
   // Of atlas `a` (channel 0's; the others share its layout), read by hand through texel views or sampled.
   static AtlasReads reads_of(const gpu::Image& a, bool by_hand);
-  // Which per-ray reads go through a uniform buffer or texel view over their
-  // storage buffer (brick_raycast.comp constants 108, 109, 111): where all of
-  // a view's fit. lavapipe runs both sides of a branch, so it is a constant.
-  struct UniformWindows {
+  // Which per-ray reads go through a texel view or uniform buffer over their
+  // storage buffer (brick_raycast.comp constants 108, 109, 111), faster on
+  // lavapipe: where what the view reads fits. lavapipe runs both sides of a
+  // branch, so each is a constant.
+  struct FastReads {
     bool record_texels = false;  // the brick records as texels (15 over 4)
     bool cell_bits = false;  // the E-A and emission cells' emptiness bits (14 over 13)
     bool key_texels = false;  // the MIP / MinIP cells' keys as texels (16 over 11; constant 111)
@@ -297,7 +298,7 @@ class BrickRenderer final : public VolumeRenderer {
     bool gradient = false, depth_color = false, gamma = false, naive_opacity = false;
     bool composite = false;  // channels blend into one medium (VXR_BLEND_COMPOSITE)
     bool cells = false;      // its dispatches may walk empty-space cells
-    UniformWindows windows;
+    FastReads fast;
     SampleWork work = SampleWork::kShade;
     bool no_bricks = false;  // no brick loop: for tiles no brick touches
     bool waves = false;      // its dispatches carry rays between passes (BrickPassMode::kMultipass)
@@ -308,7 +309,7 @@ class BrickRenderer final : public VolumeRenderer {
   // features), for whether its dispatches use empty-space cells, the
   // uniform windows it reads and whether it marches multipass waves.
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, uint32_t texel_bytes,
-                                                   bool cells, UniformWindows windows, SampleWork work, bool waves,
+                                                   bool cells, FastReads fast, SampleWork work, bool waves,
                                                    bool no_bricks = false);
   // The classification pass's pipeline: only what classify_cells reads is specialised.
   Result<const gpu::ComputePipeline*> classify_pipeline(const RenderSettings& s, uint32_t model);
