@@ -69,7 +69,7 @@ struct BrickCastParams {
   vec4 atlas_inv;  // xyz: 1 / atlas size in texels, w: empty-space cell size in voxels
   uvec4 warp;      // lens warp (z > 1): x, y: rays across each outer band along x, y; z: pixels per ray there
   // The rays' own trilinear filter over the atlas's texel view
-  // (specialisation constant 115): x, y: row and slice pitch in texels; z:
+  // (specialisation constant 115): x, y: row and slice pitch in view elements; z:
   // the last texel along x and y (x | y << 16), w: along z.
   uvec4 texels;
   // x: the view's first brick record as a texel of binding 15 (the brick

@@ -307,7 +307,7 @@ class BrickRenderer final : public VolumeRenderer {
   };
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
   // features), for whether its dispatches use empty-space cells, the
-  // uniform windows it reads and whether it marches multipass waves.
+  // fast reads it uses (FastReads) and whether it marches multipass waves.
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, uint32_t texel_bytes,
                                                    bool cells, FastReads fast, SampleWork work, bool waves,
                                                    bool no_bricks = false);
