@@ -283,3 +283,26 @@ TEST_CASE("brick render: a close view mixes levels by distance (golden)") {
         "2048^3 procedural vessels seen from inside the bounding sphere at 60 degrees: near bricks fine, far ones "
         "coarse (bias 1), converged");
 }
+
+TEST_CASE("brick render: render_into reuses its image and the staging buffer across sizes and gives render()'s pixels") {
+  test::GpuTestScope scope;
+  auto src = make(64);
+  auto r = renderer(*src);
+  const Camera cam = orbit_camera(r->placement(), 30, 25, 1.25);
+  BrickFrameSettings f;
+  f.lod.force_level = 0;
+  const ImageRgba8 warm = converge(*r, cam, vessels(), f, 80, 60);  // every brick resident
+  REQUIRE(test::looks_non_blank(warm));
+  ImageRgba8 into;
+  // Down then up: the staging buffer shrinks in use, then grows.
+  for (const auto& [w, h] : {std::pair{80u, 60u}, std::pair{40u, 30u}, std::pair{120u, 90u}, std::pair{120u, 90u}}) {
+    CAPTURE(w);
+    REQUIRE(r->render_into(into, cam, vessels(), f, w, h).is_ok());
+    auto fresh = r->render(cam, vessels(), f, w, h);
+    REQUIRE(fresh.is_ok());
+    CHECK(into.width == w);
+    CHECK(into.height == h);
+    CHECK(into.pixels == fresh->pixels);
+    CHECK(test::looks_non_blank(into));
+  }
+}

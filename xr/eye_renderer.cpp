@@ -143,7 +143,7 @@ Result<ImageRgba8> EyeRenderer::render(const ViewSpec& view, const VolumeTransfo
   VXR_RETURN_IF_ERROR(recorded);
   offscreen_.layout = VK_IMAGE_LAYOUT_GENERAL;
   ImageRgba8 img(view.width, view.height);
-  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, offscreen_, img.pixels.data(), img.pixels.size()));
+  VXR_RETURN_IF_ERROR(readback_.read(ctx_, offscreen_, img.pixels.data(), img.pixels.size()));
   return img;
 }
 

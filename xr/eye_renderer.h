@@ -68,6 +68,7 @@ class EyeRenderer {
   AnnotationScene annotations_;
   std::vector<gpu::Image> warped_;  // per view index
   gpu::Image offscreen_;            // render()'s target
+  gpu::ImageReadback readback_;     // render()'s staging, kept between frames
 };
 
 // Records a whole-image layout change with full (ALL_COMMANDS) dependencies:

@@ -247,6 +247,11 @@ void buffer_barrier(VkCommandBuffer cmd, VkBuffer buffer, VkPipelineStageFlags2 
 }
 
 Status readback_image(Context& ctx, Image& image, void* out, size_t bytes, VkImageLayout final_layout) {
+  ImageReadback once;
+  return once.read(ctx, image, out, bytes, final_layout);
+}
+
+Status ImageReadback::read(Context& ctx, Image& image, void* out, size_t bytes, VkImageLayout final_layout) {
   VXR_TRACE_SCOPE("gpu.readback_image");
   ++g_readbacks;
   const bool depth = image.format == VK_FORMAT_D32_SFLOAT;
@@ -255,8 +260,11 @@ Status readback_image(Context& ctx, Image& image, void* out, size_t bytes, VkIma
   if (expected != bytes)
     return invalid_argument("readback_image: buffer has " + std::to_string(bytes) + " bytes, image needs " +
                             std::to_string(expected));
-  VXR_ASSIGN_OR_RETURN(Buffer staging, create_buffer(ctx, {bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                                           MemoryIntent::kReadback, "readback"}));
+  if (staging_.size < bytes) {
+    VXR_ASSIGN_OR_RETURN(staging_, create_buffer(ctx, {bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                                       MemoryIntent::kReadback, "readback"}));
+  }
+  const Buffer& staging = staging_;
   VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
     transition_image(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
                      VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);

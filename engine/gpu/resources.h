@@ -100,6 +100,18 @@ Status upload_image(Context& ctx, Image& image, const void* texels, size_t bytes
 Status readback_image(Context& ctx, Image& image, void* out, size_t bytes,
                       VkImageLayout final_layout = VK_IMAGE_LAYOUT_GENERAL);
 
+// readback_image through one staging buffer kept between calls (grown to the
+// largest image), for loops that read a frame back every frame: a new
+// buffer each time is host memory allocated, mapped and faulted in per frame.
+class ImageReadback {
+ public:
+  Status read(Context& ctx, Image& image, void* out, size_t bytes,
+              VkImageLayout final_layout = VK_IMAGE_LAYOUT_GENERAL);
+
+ private:
+  Buffer staging_;
+};
+
 // Image readbacks (readback_image) in this process so far: frame loops report
 // how many a frame took (none on the XR and desktop paths).
 uint64_t readback_count();

@@ -307,8 +307,8 @@ Result<AnnotationImage> AnnotationRenderer::render(const Camera& camera, const A
   VXR_RETURN_IF_ERROR(recorded);
   View& v = *views_[0];
   AnnotationImage out{ImageRgba8(width, height), std::vector<float>(size_t(width) * height)};
-  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, v.color, out.color.pixels.data(), out.color.pixels.size()));
-  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, v.depth_out, out.view_depth.data(), out.view_depth.size() * sizeof(float)));
+  VXR_RETURN_IF_ERROR(readback_.read(ctx_, v.color, out.color.pixels.data(), out.color.pixels.size()));
+  VXR_RETURN_IF_ERROR(readback_.read(ctx_, v.depth_out, out.view_depth.data(), out.view_depth.size() * sizeof(float)));
   return out;
 }
 

@@ -128,6 +128,7 @@ class AnnotationRenderer {
   gpu::ComputePipeline pipeline_, mesh_pipeline_;
   gpu::Handle<VkDescriptorPool> pool_, mesh_pool_;
   std::vector<std::unique_ptr<View>> views_;
+  gpu::ImageReadback readback_;  // render()'s staging (colour, then depth), kept between frames
 };
 
 // The volume (premultiplied float RGBA, rays ended at the annotations' depth)

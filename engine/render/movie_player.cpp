@@ -97,7 +97,7 @@ Result<PlaybackFrame> MoviePlayer::frame(double now, const Camera& camera, const
     const auto t1 = std::chrono::steady_clock::now();
     BrickFrameStats bs;
     do {
-      VXR_ASSIGN_OR_RETURN(*image, renderer_->render(camera, settings, frame, width, height, &bs));
+      VXR_RETURN_IF_ERROR(renderer_->render_into(*image, camera, settings, frame, width, height, &bs));
       ++st.passes;
     } while (bs.lod.missing > 0 && st.passes < 16);
     if (bs.lod.missing > 0)

@@ -90,7 +90,7 @@ Result<StillResult> render_still(gpu::Context& gpu, const VolumeSession& session
   while (int(out.frames.size()) < max_frames) {
     if (budget) frame.lod.lod_bias = controller.bias;
     const auto f0 = std::chrono::steady_clock::now();
-    VXR_ASSIGN_OR_RETURN(out.image, r.render(camera, s, frame, o.width, o.height, &out.last, underlay));
+    VXR_RETURN_IF_ERROR(r.render_into(out.image, camera, s, frame, o.width, o.height, &out.last, underlay));
     StillFrame f;
     f.wall_ms = ms_since(f0);
     f.frame = int(out.frames.size()) + 1;

@@ -27,9 +27,7 @@ Result<TimedFrames> time_converged(BrickRenderer& r, const Camera& cam, const Re
   t.wall_ms = median_ms(
       repeats,
       [&] {
-        auto img = r.render(cam, s, f, size, size, &t.stats);
-        if (!img) return img.status();
-        t.image = std::move(*img);
+        VXR_RETURN_IF_ERROR(r.render_into(t.image, cam, s, f, size, size, &t.stats));
         gpu.push_back(t.stats.gpu_ms);
         return Status::ok();
       },

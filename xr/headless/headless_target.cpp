@@ -82,7 +82,7 @@ Status HeadlessTarget::write_pngs(const std::string& tag) {
   for (size_t v = 0; v < images_.size(); ++v) {
     ImageRgba8 img(images_[v].extent.width, images_[v].extent.height);
     images_[v].layout = VK_IMAGE_LAYOUT_GENERAL;
-    VXR_RETURN_IF_ERROR(gpu::readback_image(*ctx_, images_[v], img.pixels.data(), img.pixels.size()));
+    VXR_RETURN_IF_ERROR(readback_.read(*ctx_, images_[v], img.pixels.data(), img.pixels.size()));
     const char* eye = images_.size() == 1 ? "view" : (v == 0 ? "left" : "right");
     const std::string path = (std::filesystem::path(o_.png_dir) / (tag + "_" + eye + ".png")).string();
     VXR_RETURN_IF_ERROR(write_png(path, img));

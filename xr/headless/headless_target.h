@@ -32,13 +32,17 @@ class HeadlessTarget : public FrameTarget {
   Result<TargetImage> acquire(size_t view) override;
   Status end_frame(const FrameState& frame, const FrameContent& content) override;
   void request_exit() override { exit_requested_ = true; }
-  void detach() override { images_.clear(); }
+  void detach() override {
+    images_.clear();
+    readback_ = {};
+  }
 
  private:
   Status write_pngs(const std::string& tag);
   HeadlessOptions o_;
   gpu::Context* ctx_ = nullptr;
   std::vector<gpu::Image> images_;
+  gpu::ImageReadback readback_;  // write_pngs()' staging, kept between frames
   uint64_t frame_ = 0;
   bool exit_requested_ = false;
 };

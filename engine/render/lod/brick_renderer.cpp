@@ -1320,15 +1320,22 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
 Result<ImageRgba8> BrickRenderer::render(const Camera& camera, const RenderSettings& s,
                                          const BrickFrameSettings& frame, uint32_t width, uint32_t height,
                                          BrickFrameStats* stats_out, const UnderlayRecorder& underlay) {
+  ImageRgba8 img;
+  VXR_RETURN_IF_ERROR(render_into(img, camera, s, frame, width, height, stats_out, underlay));
+  return img;
+}
+
+Status BrickRenderer::render_into(ImageRgba8& out, const Camera& camera, const RenderSettings& s,
+                                  const BrickFrameSettings& frame, uint32_t width, uint32_t height,
+                                  BrickFrameStats* stats_out, const UnderlayRecorder& underlay) {
   VXR_TRACE_SCOPE("brick_renderer.render");
   if (width == 0 || height == 0) return invalid_argument("render: image size has a zero side");
   VXR_RETURN_IF_ERROR(ensure_target(width, height));
   VXR_RETURN_IF_ERROR(draw_and_wait(camera, s, frame,
                                     {target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL},
                                     stats_out, underlay));
-  ImageRgba8 img(width, height);
-  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, target_, img.pixels.data(), img.pixels.size()));
-  return img;
+  if (out.width != width || out.height != height) out = ImageRgba8(width, height);
+  return readback_.read(ctx_, target_, out.pixels.data(), out.pixels.size());
 }
 
 Result<ImageRgbaF> BrickRenderer::render_float(const Camera& camera, const RenderSettings& s,
@@ -1356,7 +1363,7 @@ Result<ImageRgbaF> BrickRenderer::render_float(const Camera& camera, const Rende
       {float_target_.image, VK_NULL_HANDLE, float_target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL}, stats_out,
       underlay));
   ImageRgbaF img{width, height, std::vector<float>(size_t(width) * height * 4)};
-  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, float_target_, img.rgba.data(), img.rgba.size() * sizeof(float)));
+  VXR_RETURN_IF_ERROR(readback_.read(ctx_, float_target_, img.rgba.data(), img.rgba.size() * sizeof(float)));
   return img;
 }
 
@@ -1547,7 +1554,7 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
   std::memcpy(c, counters_.mapped, 8);
   st.samples = uint64_t(c[0]) | (uint64_t(c[1]) << 32);
   ImageRgba8 img(width, height);
-  VXR_RETURN_IF_ERROR(gpu::readback_image(ctx_, target_, img.pixels.data(), img.pixels.size()));
+  VXR_RETURN_IF_ERROR(readback_.read(ctx_, target_, img.pixels.data(), img.pixels.size()));
   if (stats_out) *stats_out = st;
   return img;
 }

@@ -211,6 +211,11 @@ class BrickRenderer final : public VolumeRenderer {
   Result<ImageRgba8> render(const Camera& camera, const RenderSettings& settings, const BrickFrameSettings& frame,
                             uint32_t width, uint32_t height, BrickFrameStats* stats = nullptr,
                             const UnderlayRecorder& underlay = {});
+  // render() into `out`, whose pixels are reused when it has the size: frame
+  // loops (stills, movies, benchmarks) then allocate no image per frame.
+  Status render_into(ImageRgba8& out, const Camera& camera, const RenderSettings& settings,
+                     const BrickFrameSettings& frame, uint32_t width, uint32_t height,
+                     BrickFrameStats* stats = nullptr, const UnderlayRecorder& underlay = {});
   // The same frame before the rounding to 8 bits (numerics tests, error
   // measurements): premultiplied RGBA floats.
   Result<ImageRgbaF> render_float(const Camera& camera, const RenderSettings& settings,
@@ -400,6 +405,7 @@ class BrickRenderer final : public VolumeRenderer {
   gpu::Handle<VkSampler> linear_;
   gpu::Handle<VkBufferView> transfer_rows_;  // transfer_buf_'s colour and opacity rows as RGBA32F texels
   gpu::Image target_, float_target_, accum_;
+  gpu::ImageReadback readback_;  // render()'s and render_float()'s staging, kept between frames
   gpu::Image no_under_depth_, no_under_color_;  // 1x1, bound where a view has no underlay
   std::vector<gpu::Image> mono_tex_;  // per drawn channel
   std::vector<gpu::ImageTexels> mono_texels_;  // per drawn channel, or none (declared after mono_tex_: destroyed first)
