@@ -283,7 +283,7 @@ TEST_CASE("empty-space cells: a brick that keeps every cell is marched without a
       {"visible from 0.05: the outer bricks walk", OpticalModel::kEmissionAbsorption,
        {{0.0, 0.0}, {0.05, 0.0}, {0.06, 1.0}, {1.0, 1.0}}, -1},
       {"MIP: every brick walks", OpticalModel::kMip, {{0.0, 0.1}, {1.0, 1.0}}, 64},
-      {"MIP at a step of over half a cell: no cell walk at all", OpticalModel::kMip, {{0.0, 0.1}, {1.0, 1.0}}, 0},
+      {"MIP at a step over an eighth of a cell (4-voxel cells, step 1): no cell walk at all", OpticalModel::kMip, {{0.0, 0.1}, {1.0, 1.0}}, 0},
   };
   for (const Case& c : cases) {
     RenderSettings s;
@@ -292,7 +292,7 @@ TEST_CASE("empty-space cells: a brick that keeps every cell is marched without a
     s.channels[0].window_lo = 0;
     s.channels[0].window_hi = 255;
     s.channels[0].opacity_points = c.opacity;
-    s.step_voxels = &c == &cases[3] ? 4.0 : 0.5;
+    s.step_voxels = &c == &cases[3] ? 1.0 : 0.5;
     s.density = 0.05;
     BrickFrameSettings f;
     f.lod.force_level = 0;

@@ -769,13 +769,16 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   // Empty-space cells: for the models whose empty samples change nothing
   // (average counts every length, iso refines against the previous sample).
   // MIP / MinIP test a cell against the ray's running value, so each cell
-  // costs a walk: measured with `vxr bench peer` (MRI, lavapipe, 4-voxel
-  // cells, one load per test) the cells pay from ~2 samples per cell (step 2:
-  // 186 ms vs 216 without; step 1: 245 vs 325).
+  // costs a walk; they pay from 8 samples a cell (4-voxel cells: step 0.5).
+  // MRI MIP (`vxr render assets/mri-stack/volume.json --model mip --window
+  // 75,200`, lavapipe, medians of alternating runs) with cells / without:
+  // step 2 33.5 / 23.7 ms, step 1 40.2 / 37.9, step 0.5 48.8 / 62.7. An H200
+  // (`vxr bench peer --size 2048`, skipping on / off) agrees: 3.7 / 2.2 GPU ms
+  // at step 2, 3.9 / 3.7 at 1, 4.4 / 6.9 at 0.5.
   const bool reduce = model == VXR_MODEL_MIP || model == VXR_MODEL_MINIP;
   const BrickCells walk = walk_cells(pool_->cells(), reduce || cell_walk == CellWalk::kGroups);
   const bool cells = cell_walk != CellWalk::kOff && (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION ||
-                                    (reduce && walk.cell_size >= 2.0 * s.step_voxels));
+                                    (reduce && walk.cell_size >= 8.0 * s.step_voxels));
   const uint32_t cells_per_axis = cells ? walk.cells_per_axis : 0u;
   if (!cells && stats) stats->bricks_walked = 0;  // record_view counted the bricks that would walk
   const uint32_t range_cells_per_axis = pool_->cells().cells_per_axis;
