@@ -620,7 +620,10 @@ void main() {
     const bool group_runs = cells;  // see the run loop below
     int k = 0, run_end = cells ? 0 : n;
     while (k < n && !ray.done) {
-      if (k >= run_end) {
+      // `cells` first: without constant 106 the walk compiles out. lavapipe
+      // runs an if's code even where no lane takes it, and `k >= run_end`
+      // alone left a walk that no ray needs in every brick (5% of a frame).
+      if (cells && k >= run_end) {
         // A 3D DDA from sample k's cell: a step is compares and adds, where
         // finding each cell from a sample's position and computing its exit
         // cost about twice as much. Two cells a step: the second cell's test

@@ -872,7 +872,29 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
     // view that later leaves tiles empty builds no pipeline mid-session.
     VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* empty_pipe,
                          pipeline_for(s, model, atlas.texel_bytes, false, {}, work, false, true));
-    dispatch_entries(spans.marched_tiles, VXR_BRICK_TILE_LISTS | VXR_BRICK_TILE_SUBSET | out_flags);
+    // The tiles whose bricks all march without a walk, with the variant
+    // that has no cell code: lavapipe runs an if's code even where no lane
+    // takes it, so a walk no ray needs still cost each brick a pass (dense
+    // 256^3 E-A, `vxr bench roofline`: 5% of the frame).
+    const gpu::ComputePipeline* plain_pipe = pipe;
+    if (cells_per_axis > 0) {
+      FastReads no_cells = fast;
+      no_cells.cell_bits = no_cells.key_texels = false;
+      VXR_ASSIGN_OR_RETURN(plain_pipe, pipeline_for(s, model, atlas.texel_bytes, false, no_cells, work, false));
+    }
+    const uint32_t list_flags = VXR_BRICK_TILE_LISTS | VXR_BRICK_TILE_SUBSET | out_flags;
+    if (plain_pipe == pipe) {
+      // One dispatch: the plain tiles follow the marched ones in the list.
+      dispatch_entries({spans.marched_tiles.x, spans.marched_tiles.y + spans.plain_tiles.y}, list_flags);
+    } else {
+      dispatch_entries(spans.marched_tiles, list_flags);
+      if (spans.plain_tiles.y > 0) {
+        if (spans.marched_tiles.y > 0) compute_barrier(cmd);  // other pixels of the same image (see below)
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, plain_pipe->pipeline);
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, plain_pipe->layout, 0, 1, &set, 0, nullptr);
+        dispatch_entries(spans.plain_tiles, list_flags);
+      }
+    }
     if (spans.empty_tiles.y > 0) {
       // Other pixels of the same image, but the validation layer tracks the
       // whole image (and the cell bits the shader can write).
@@ -1051,9 +1073,9 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Bri
   return out;
 }
 
-Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const LodView& view, const WarpAxis& ax,
-                                       const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used,
-                                       WorkSpans* spans) {
+Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
+                                       const LodView& view, const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst,
+                                       size_t capacity, size_t* used, WorkSpans* spans) {
   const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
   std::vector<std::vector<uint32_t>> lists(size_t(tw) * th);
   size_t total = lists.size();
@@ -1076,19 +1098,26 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
     dst[t] = glm::uvec4(next, uint32_t(lists[t].size()), 0, 0);
     for (uint32_t b : lists[t]) dst[next++] = glm::uvec4(b, 0, 0, 0);
   }
-  // Then the tiles as workgroups, those with bricks and those without, in
-  // an order that spreads the image's rows over any contiguous share of a
-  // dispatch: lavapipe hands each thread one contiguous share of the
-  // workgroups, and in row order one thread took the top of the image, the
-  // other the bottom, whatever either held (MRI E-A at step 1: 69.5 ms
-  // against 76.8). A row's tiles stay together.
+  // Then the tiles as workgroups, by kind (WorkSpans), in an order that
+  // spreads the image's rows over any contiguous share of a dispatch:
+  // lavapipe hands each thread one contiguous share of the workgroups, and
+  // in row order one thread took the top of the image, the other the
+  // bottom, whatever either held (MRI E-A at step 1: 69.5 ms against 76.8).
+  // A row's tiles stay together.
+  enum TileKind : int { kMarched, kPlain, kEmpty };
+  auto kind_of = [&](const std::vector<uint32_t>& list) {
+    if (list.empty()) return kEmpty;
+    for (uint32_t b : list)
+      if (walks[b]) return kMarched;
+    return kPlain;
+  };
   if (tile_rows_.size() != th) tile_rows_ = interleaved_rows(th);
-  for (bool marched : {true, false}) {
-    glm::uvec2& span = marched ? spans->marched_tiles : spans->empty_tiles;
+  for (TileKind kind : {kMarched, kPlain, kEmpty}) {
+    glm::uvec2& span = kind == kMarched ? spans->marched_tiles : kind == kPlain ? spans->plain_tiles : spans->empty_tiles;
     span = glm::uvec2(next, 0);
     for (uint32_t y : tile_rows_)
       for (uint32_t x = 0; x < tw; ++x) {
-        if (lists[size_t(y) * tw + x].empty() == marched) continue;
+        if (kind_of(lists[size_t(y) * tw + x]) != kind) continue;
         dst[next++] = glm::uvec4(y * tw + x, x * 8, y * 8, 0);
         ++span.y;
       }
@@ -1204,6 +1233,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   std::optional<CellOpacity> cell_opacity;
   if (skip_cells && boxes) cell_opacity.emplace(s, tf, value_scales_);
   std::vector<BrickBox> march_world(lod.draw.size());
+  std::vector<uint8_t> walks(lod.draw.size());
   // A brick whose box keeps every cell is marched without a cell walk: the
   // walk would find no empty cell (dense 256^3 E-A, `vxr bench roofline`:
   // 0.87 against 1.29-1.33 ms of marching per million samples). A brick with
@@ -1218,6 +1248,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     CellFacts facts;
     const BrickBox local = march_box(key, frame.lod, cell_opacity ? &*cell_opacity : nullptr, &facts);
     const bool walk = reduce || !facts.all_kept;
+    walks[i] = walk;
     fill_record(static_cast<uint8_t*>(table_.mapped) + table_base + i * sizeof(shader::BrickRecord), key,
                 glm::vec3(o), view, frame.lod, local, walk);
     if (cell_opacity && walk) {  // only walked bricks weigh in the choice of cells or groups below
@@ -1241,7 +1272,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   if (mode == BrickPassMode::kMultipass) {
     VXR_ASSIGN_OR_RETURN(spans.waves, build_waves(march_world, view, ax, ay, items_dst, items_capacity, &items_n));
   } else if (mode == BrickPassMode::kTiled) {
-    VXR_RETURN_IF_ERROR(build_tile_lists(march_world, view, ax, ay, items_dst, items_capacity, &items_n, &spans));
+    VXR_RETURN_IF_ERROR(
+        build_tile_lists(march_world, walks, view, ax, ay, items_dst, items_capacity, &items_n, &spans));
   }
   const VkDeviceSize items_bytes = std::max<size_t>(items_n, 1) * sizeof(glm::uvec4);
   if (items_base + items_bytes > items_.size) return out_of_range("render: the frame's work list is full");

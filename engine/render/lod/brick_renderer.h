@@ -367,9 +367,12 @@ class BrickRenderer final : public VolumeRenderer {
   // Where a view's work items are in its work list, as (first entry, count):
   // the multipass waves, or a tiled frame's tiles that some brick touches
   // and the tiles that none does (entries: tile index, x, y in pixels).
+  // Entries of the work list (first, count). Tiled: the tiles some brick
+  // that walks its cells touches, those whose bricks all march without a
+  // walk (plain), and those no brick touches, in that order.
   struct WorkSpans {
     std::vector<glm::uvec2> waves;
-    glm::uvec2 marched_tiles{0, 0}, empty_tiles{0, 0};
+    glm::uvec2 marched_tiles{0, 0}, plain_tiles{0, 0}, empty_tiles{0, 0};
   };
   // `model`: the packed parameters' VXR_MODEL_* (control.x). `records`:
   // where the view's brick records start in table_ (bytes, a multiple of
@@ -387,10 +390,12 @@ class BrickRenderer final : public VolumeRenderer {
   Result<std::vector<glm::uvec2>> build_waves(const std::vector<BrickBox>& boxes, const LodView& view,
                                               const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used);
   // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen
-  // rectangle touches it; then the tiles with a brick and those without
-  // (their spans go into `spans`).
-  Status build_tile_lists(const std::vector<BrickBox>& boxes, const LodView& view, const WarpAxis& ax,
-                          const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used, WorkSpans* spans);
+  // rectangle touches it; then the tiles with a brick that walks (`walks`,
+  // per drawn brick), those with bricks that do not, and those without
+  // any (their spans go into `spans`).
+  Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks, const LodView& view,
+                          const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used,
+                          WorkSpans* spans);
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
   gpu::Context& ctx_;
