@@ -365,11 +365,9 @@ class BrickRenderer final : public VolumeRenderer {
   // where the regions meet, or their keys where the settings differ.
   void forget_overwritten(uint32_t view, const CellClassInputs& written);
   // Where a view's work items are in its work list, as (first entry, count):
-  // the multipass waves, or a tiled frame's tiles that some brick touches
-  // and the tiles that none does (entries: tile index, x, y in pixels).
-  // Entries of the work list (first, count). Tiled: the tiles some brick
-  // that walks its cells touches, those whose bricks all march without a
-  // walk (plain), and those no brick touches, in that order.
+  // the multipass waves, or a tiled frame's tiles (entries: tile index, x, y
+  // in pixels) that some brick walking its cells touches, those whose bricks
+  // all march without a walk (plain), and those no brick touches, in that order.
   struct WorkSpans {
     std::vector<glm::uvec2> waves;
     glm::uvec2 marched_tiles{0, 0}, plain_tiles{0, 0}, empty_tiles{0, 0};
