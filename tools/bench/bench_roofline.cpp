@@ -24,7 +24,6 @@
 namespace vxr::bench {
 namespace {
 
-constexpr uint32_t kSize = 512;
 
 struct Scene {
   std::string name;
@@ -80,7 +79,7 @@ struct SceneTimes {
   double ceiling_samples_per_s = 0.0;
 };
 
-Result<SceneTimes> measure(gpu::Context& ctx, SamplingCeiling& ceiling, const Scene& sc, int repeats) {
+Result<SceneTimes> measure(gpu::Context& ctx, SamplingCeiling& ceiling, const Scene& sc, uint32_t size, int repeats) {
   BrickRendererOptions ro;
   ro.preload_if_fits = true;
   VXR_ASSIGN_OR_RETURN(auto r, BrickRenderer::create(ctx, *sc.source, ro));
@@ -95,13 +94,13 @@ Result<SceneTimes> measure(gpu::Context& ctx, SamplingCeiling& ceiling, const Sc
   f.lod.force_level = 0;
   for (size_t w = 0; w < works.size(); ++w) {  // converges, and builds each pipeline
     f.sample_work = works[w];
-    VXR_ASSIGN_OR_RETURN(t[w], time_converged(*r, cam, sc.settings, f, kSize, 1));
+    VXR_ASSIGN_OR_RETURN(t[w], time_converged(*r, cam, sc.settings, f, size, 1));
   }
   for (int i = 0; i < repeats; ++i) {
     for (size_t w = 0; w < works.size(); ++w) {
       f.sample_work = works[w];
       const auto t0 = std::chrono::steady_clock::now();
-      VXR_ASSIGN_OR_RETURN(t[w].image, r->render(cam, sc.settings, f, kSize, kSize, &t[w].stats));
+      VXR_RETURN_IF_ERROR(r->render_into(t[w].image, cam, sc.settings, f, size, size, &t[w].stats));
       wall[w].push_back(ms_since(t0));
       gpu[w].push_back(t[w].stats.gpu_ms);
     }
@@ -125,8 +124,13 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
                                    "measure the device's memory and sampling ceilings and the brick renderer's share");
   auto opt = std::make_shared<BenchOptions>();
   add_common_options(cmd, *opt);
-  cmd->callback([&inv, opt] {
-    inv.run = [opt] {
+  // A GPU draws 512x512 in about one wave of its cores (launch and tail, not
+  // sampling): larger images show its sampling share.
+  auto size = std::make_shared<uint32_t>(512);
+  cmd->add_option("--size", *size, "image width and height in pixels of the scenes' frames (default 512)")
+      ->check(CLI::Range(16u, 4096u));
+  cmd->callback([&inv, opt, size] {
+    inv.run = [opt, size] {
       auto gpu = cli::open_gpu();
       if (!gpu) return cli::fail(gpu.status());
       gpu::Context& ctx = **gpu;
@@ -142,7 +146,7 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
                    roof->copy_gb_per_s, roof->transfer_gb_per_s, roof->trilinear_samples_per_s / 1e6);
       nlohmann::json rows = nlohmann::json::array();
       for (const Scene& sc : *made) {
-        auto times = measure(ctx, **ceiling, sc, opt->repeats);
+        auto times = measure(ctx, **ceiling, sc, *size, opt->repeats);
         if (!times) return cli::fail(times.status());
         const TimedFrames* m = &times->frame;
         const double rate = m->stats.samples / (m->gpu_ms * 1e-3);
@@ -194,7 +198,7 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
             {"transfer_ms", roof->transfer_ms},
             {"sample_ms", roof->sample_ms}}},
           {"brick_renderer",
-           {{"image_size", {kSize, kSize}},
+           {{"image_size", {*size, *size}},
             {"note", "level 0, preloaded, skipping on; rate = samples taken / GPU time of the frame; roofline_ratio against "
                       "ceiling_samples_per_s, the trilinear kernel timed in turn with the scene's frames"},
             {"scenes", rows}}},
