@@ -220,6 +220,40 @@ TEST_CASE("volume renderer: each view of a frame keeps its own cell classificati
   }
 }
 
+TEST_CASE("volume renderer: views that need a longer work list than it was made with grow it, mid-frame too, and keep the image") {
+  test::GpuTestScope scope;
+  auto src = vessels_source(128);
+  auto roomy = make_renderer(*src);
+  BrickRendererOptions o;
+  o.pool.slots = {8, 8, 8};
+  o.max_work_items = 40;  // a 32x32 view alone needs more (16 tiles, twice, and their brick lists)
+  auto made = BrickRenderer::create(test::gpu_context(), *src, o);
+  REQUIRE(made.is_ok());
+  BrickRenderer& tight = **made;
+  const Camera left = orbit_camera(roomy->placement(), 10, 0), right = orbit_camera(roomy->placement(), 80, 30);
+  const ImageRgba8 a = converged(*roomy, left, vessels(), 32, 32), b = converged(*roomy, right, vessels(), 32, 32);
+  Target both = make_target(VK_FORMAT_R8G8B8A8_UNORM, 64, 32, true);
+  RenderTarget l = both.rt(), rr = both.rt();
+  l.rect = {{0, 0}, {32, 32}};
+  rr.rect = {{32, 0}, {32, 32}};
+  for (BrickPassMode mode : {BrickPassMode::kTiled, BrickPassMode::kMultipass}) {
+    CAPTURE(int(mode));
+    BrickFrameSettings f;
+    f.mode = mode;
+    for (int frame = 0; frame < 3; ++frame) {  // the first frames grow the list between the views
+      Status recorded = Status::ok();
+      REQUIRE(test::gpu_context().submit_and_wait([&](VkCommandBuffer cmd) {
+        recorded = tight.begin_frame(cmd, f);
+        if (recorded) recorded = tight.record_view(cmd, left, vessels(), f, l);
+        if (recorded) recorded = tight.record_view(cmd, right, vessels(), f, rr);
+      }).is_ok());
+      REQUIRE_MESSAGE(recorded.is_ok(), recorded.to_string());
+      if (frame == 0) continue;  // bricks still arriving
+      CHECK(bytes_off_side_by_side(read_back(both.image), a, b) == 0);
+    }
+  }
+}
+
 TEST_CASE("volume renderer: new poses and sizes build no pipeline and read nothing back") {
   test::GpuTestScope scope;
   auto src = vessels_source(128);

@@ -1058,10 +1058,11 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Bri
     for (uint32_t pi : hit_pixels) tile_hit[size_t((pi / w) / 8) * tw + (pi % w) / 8] = 0;
     waves = std::max(waves, wave + 1);
   }
-  if (items.size() > capacity)
+  if (items.size() > capacity) {
+    *used = items.size();  // record_view grows the list to this and builds again
     return out_of_range("render: the view needs " + std::to_string(items.size()) + " brick tiles, the frame's work "
-                        "list has room for " + std::to_string(capacity) + " (of " + std::to_string(opt_.max_work_items) +
-                        "); raise the LOD bias or use a smaller image");
+                        "list has room for " + std::to_string(capacity) + "; raise the LOD bias or use a smaller image");
+  }
   std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.wave < b.wave; });
   std::vector<glm::uvec2> out(waves, glm::uvec2(0));
   *used = items.size();
@@ -1088,10 +1089,11 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
   }
   for (const auto& l : lists) total += l.size();
   total += lists.size();  // each tile once more, among those with bricks or those without
-  if (total > capacity)
+  if (total > capacity) {
+    *used = total;  // record_view grows the list to this and builds again
     return out_of_range("render: the view needs " + std::to_string(total) + " tile entries, the frame's work list "
-                        "has room for " + std::to_string(capacity) + " (of " + std::to_string(opt_.max_work_items) +
-                        "); raise the LOD bias or use a smaller image");
+                        "has room for " + std::to_string(capacity) + "; raise the LOD bias or use a smaller image");
+  }
   *used = total;
   uint32_t next = static_cast<uint32_t>(lists.size());
   for (size_t t = 0; t < lists.size(); ++t) {
@@ -1125,6 +1127,22 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
   return Status::ok();
 }
 
+Status BrickRenderer::grow_work_list(size_t entries) {
+  const VkDeviceSize bytes = std::max<VkDeviceSize>(items_.size * 2, VkDeviceSize(entries) * sizeof(glm::uvec4));
+  if (bytes > ctx_.limits().maxStorageBufferRange)
+    return out_of_range("render: the view needs " + std::to_string(entries) + " work-list entries (" +
+                        std::to_string(bytes >> 20) + " MiB), more than one storage buffer holds on this device (" +
+                        std::to_string(ctx_.limits().maxStorageBufferRange >> 20) +
+                        " MiB); raise the LOD bias or use a smaller image");
+  VXR_ASSIGN_OR_RETURN(gpu::Buffer grown, gpu::create_buffer(ctx_, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                                    gpu::MemoryIntent::kUpload, "brick work items"}));
+  retired_buffers_.push_back(std::move(items_));
+  items_ = std::move(grown);
+  items_used_ = 0;
+  gpu::write_storage_buffer(ctx_, mono_set_, 6, items_.buffer);  // not bound in a view's frame
+  return Status::ok();
+}
+
 Status BrickRenderer::begin_frame(VkCommandBuffer cmd, const BrickFrameSettings& frame) {
   VXR_TRACE_SCOPE("brick_renderer.begin_frame");
   // Pool changes first, before this frame records anything: a rebuild waits
@@ -1137,6 +1155,7 @@ Status BrickRenderer::begin_frame(VkCommandBuffer cmd, const BrickFrameSettings&
   apron_wanted_ = 0;
   VXR_RETURN_IF_ERROR(ensure_timepoint(frame.lod.timepoint));
   retired_.clear();  // the caller waited for the frame that used them
+  retired_buffers_.clear();
   views_ = 0;
   table_used_ = items_used_ = bits_used_ = 0;
   tf_recorded_ = false;
@@ -1264,17 +1283,27 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   BrickPassMode mode = frame.mode != BrickPassMode::kAuto ? frame.mode : BrickPassMode::kTiled;
   // Waves carry a ray's state in one RGBA32F texel; larger states march tiled.
   if (mode == BrickPassMode::kMultipass && !brick_state_fits_texel(s, channels())) mode = BrickPassMode::kTiled;
-  const VkDeviceSize items_base = align_up(items_used_, salign);
-  const size_t items_capacity = items_base < items_.size ? (items_.size - items_base) / sizeof(glm::uvec4) : 0;
-  auto* items_dst = reinterpret_cast<glm::uvec4*>(static_cast<uint8_t*>(items_.mapped) + items_base);
-  size_t items_n = 0;
+  VkDeviceSize items_base = align_up(items_used_, salign);
+  size_t items_capacity = 0, items_n = 0;
   WorkSpans spans;
-  if (mode == BrickPassMode::kMultipass) {
-    VXR_ASSIGN_OR_RETURN(spans.waves, build_waves(march_world, view, ax, ay, items_dst, items_capacity, &items_n));
-  } else if (mode == BrickPassMode::kTiled) {
-    VXR_RETURN_IF_ERROR(
-        build_tile_lists(march_world, walks, view, ax, ay, items_dst, items_capacity, &items_n, &spans));
+  auto build_work = [&]() -> Status {
+    items_capacity = items_base < items_.size ? (items_.size - items_base) / sizeof(glm::uvec4) : 0;
+    auto* dst = reinterpret_cast<glm::uvec4*>(static_cast<uint8_t*>(items_.mapped) + items_base);
+    items_n = 0;
+    if (mode == BrickPassMode::kMultipass) {
+      VXR_ASSIGN_OR_RETURN(spans.waves, build_waves(march_world, view, ax, ay, dst, items_capacity, &items_n));
+    } else if (mode == BrickPassMode::kTiled) {
+      VXR_RETURN_IF_ERROR(build_tile_lists(march_world, walks, view, ax, ay, dst, items_capacity, &items_n, &spans));
+    }
+    return Status::ok();
+  };
+  Status built = build_work();
+  if (!built.is_ok() && items_n > items_capacity) {  // a larger image or more bricks than the list has room for
+    VXR_RETURN_IF_ERROR(grow_work_list(items_n));
+    items_base = 0;
+    built = build_work();
   }
+  VXR_RETURN_IF_ERROR(built);
   const VkDeviceSize items_bytes = std::max<size_t>(items_n, 1) * sizeof(glm::uvec4);
   if (items_base + items_bytes > items_.size) return out_of_range("render: the frame's work list is full");
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;

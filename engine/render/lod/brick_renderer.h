@@ -89,7 +89,7 @@ enum class BrickCellWalk { kAuto, kCells, kGroups };
 struct BrickRendererOptions {
   BrickPoolOptions pool;
   uint32_t max_bricks = 16384;         // brick-table capacity per frame (all views together)
-  uint32_t max_work_items = 1u << 20;  // multipass / tile-list entries per frame (all views together)
+  uint32_t max_work_items = 1u << 20;  // multipass / tile-list entries per frame (all views together); grows as needed
   uint32_t max_views = 32;             // record_view calls per frame (one per eye)
   // Streaming (vxr view): missing bricks are requested from this cache,
   // whose loader threads read and decode them; begin_frame copies in those
@@ -394,6 +394,9 @@ class BrickRenderer final : public VolumeRenderer {
   Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks, const LodView& view,
                           const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used,
                           WorkSpans* spans);
+  // A work list of at least `entries` (twice the old at least), the old one
+  // kept until the next begin_frame: the frame's earlier views still read it.
+  Status grow_work_list(size_t entries);
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
   gpu::Context& ctx_;
@@ -416,6 +419,7 @@ class BrickRenderer final : public VolumeRenderer {
   gpu::Handle<VkBufferView> no_texels_;
   std::vector<uint32_t> tile_rows_;  // build_tile_lists: the tile rows in dispatch order, kept while the height stays
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
+  std::vector<gpu::Buffer> retired_buffers_;  // likewise (a work list that grew)
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
   // table_ as RGBA32F texels for the rays' record reads (declared after it: destroyed first).
   gpu::Handle<VkBufferView> table_texels_;
