@@ -84,6 +84,15 @@ Target make_target(VkFormat format, uint32_t w, uint32_t h, bool storage) {
   return t;
 }
 
+// A 2w x h storage image and its left and right halves as view targets.
+Target side_by_side(uint32_t w, uint32_t h, RenderTarget* left, RenderTarget* right) {
+  Target t = make_target(VK_FORMAT_R8G8B8A8_UNORM, 2 * w, h, true);
+  *left = *right = t.rt();
+  left->rect = {{0, 0}, {w, h}};
+  right->rect = {{int32_t(w), 0}, {w, h}};
+  return t;
+}
+
 // Records one frame of `views` (camera, target rect) into one command buffer.
 void record_frame(BrickRenderer& r, const RenderSettings& s, const std::vector<std::pair<Camera, RenderTarget>>& views) {
   Status recorded = Status::ok();
@@ -169,10 +178,8 @@ TEST_CASE("volume renderer: two views into halves of one image in one command bu
   auto r = make_renderer(*src);
   const Camera left = orbit_camera(r->placement(), 10, 0), right = orbit_camera(r->placement(), 80, 30);
   const ImageRgba8 a = converged(*r, left, vessels(), 32, 32), b = converged(*r, right, vessels(), 32, 32);
-  Target both = make_target(VK_FORMAT_R8G8B8A8_UNORM, 64, 32, true);
-  RenderTarget l = both.rt(), rr = both.rt();
-  l.rect = {{0, 0}, {32, 32}};
-  rr.rect = {{32, 0}, {32, 32}};
+  RenderTarget l, rr;
+  Target both = side_by_side(32, 32, &l, &rr);
   record_frame(*r, vessels(), {{left, l}, {right, rr}});
   CHECK(bytes_off_side_by_side(read_back(both.image), a, b) == 0);
 }
@@ -182,10 +189,8 @@ TEST_CASE("volume renderer: each view of a frame keeps its own cell classificati
   auto src = vessels_source(128);
   auto r = make_renderer(*src);
   const Camera left = orbit_camera(r->placement(), 10, 0), right = orbit_camera(r->placement(), 80, 30);
-  Target both = make_target(VK_FORMAT_R8G8B8A8_UNORM, 64, 32, true);
-  RenderTarget l = both.rt(), rr = both.rt();
-  l.rect = {{0, 0}, {32, 32}};
-  rr.rect = {{32, 0}, {32, 32}};
+  RenderTarget l, rr;
+  Target both = side_by_side(32, 32, &l, &rr);
   // Per view: E-A (bits in the view's region) with two windows, then MIP
   // (keys per slot, shared by the views) with two windows, so each view's
   // pass rewrites keys the other one read.
@@ -232,10 +237,8 @@ TEST_CASE("volume renderer: views that need a longer work list than it was made 
   BrickRenderer& tight = **made;
   const Camera left = orbit_camera(roomy->placement(), 10, 0), right = orbit_camera(roomy->placement(), 80, 30);
   const ImageRgba8 a = converged(*roomy, left, vessels(), 32, 32), b = converged(*roomy, right, vessels(), 32, 32);
-  Target both = make_target(VK_FORMAT_R8G8B8A8_UNORM, 64, 32, true);
-  RenderTarget l = both.rt(), rr = both.rt();
-  l.rect = {{0, 0}, {32, 32}};
-  rr.rect = {{32, 0}, {32, 32}};
+  RenderTarget l, rr;
+  Target both = side_by_side(32, 32, &l, &rr);
   for (BrickPassMode mode : {BrickPassMode::kTiled, BrickPassMode::kMultipass}) {
     CAPTURE(int(mode));
     BrickFrameSettings f;
