@@ -1095,31 +1095,30 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
                         "has room for " + std::to_string(capacity) + "; raise the LOD bias or use a smaller image");
   }
   *used = total;
+  // Each tile's list, and its kind (WorkSpans): some brick walks, none does, no brick.
+  enum TileKind : uint8_t { kMarched, kPlain, kEmpty };
+  tile_kinds_.assign(lists.size(), kEmpty);
   uint32_t next = static_cast<uint32_t>(lists.size());
   for (size_t t = 0; t < lists.size(); ++t) {
     dst[t] = glm::uvec4(next, uint32_t(lists[t].size()), 0, 0);
-    for (uint32_t b : lists[t]) dst[next++] = glm::uvec4(b, 0, 0, 0);
+    for (uint32_t b : lists[t]) {
+      dst[next++] = glm::uvec4(b, 0, 0, 0);
+      tile_kinds_[t] = walks[b] ? uint8_t(kMarched) : std::min<uint8_t>(tile_kinds_[t], kPlain);
+    }
   }
-  // Then the tiles as workgroups, by kind (WorkSpans), in an order that
-  // spreads the image's rows over any contiguous share of a dispatch:
-  // lavapipe hands each thread one contiguous share of the workgroups, and
-  // in row order one thread took the top of the image, the other the
-  // bottom, whatever either held (MRI E-A at step 1: 69.5 ms against 76.8).
-  // A row's tiles stay together.
-  enum TileKind : int { kMarched, kPlain, kEmpty };
-  auto kind_of = [&](const std::vector<uint32_t>& list) {
-    if (list.empty()) return kEmpty;
-    for (uint32_t b : list)
-      if (walks[b]) return kMarched;
-    return kPlain;
-  };
+  // Then the tiles as workgroups, by kind, in an order that spreads the
+  // image's rows over any contiguous share of a dispatch: lavapipe hands
+  // each thread one contiguous share of the workgroups, and in row order
+  // one thread took the top of the image, the other the bottom, whatever
+  // either held (MRI E-A at step 1: 69.5 ms against 76.8). A row's tiles
+  // stay together.
   if (tile_rows_.size() != th) tile_rows_ = interleaved_rows(th);
-  for (TileKind kind : {kMarched, kPlain, kEmpty}) {
+  for (uint8_t kind : {kMarched, kPlain, kEmpty}) {
     glm::uvec2& span = kind == kMarched ? spans->marched_tiles : kind == kPlain ? spans->plain_tiles : spans->empty_tiles;
     span = glm::uvec2(next, 0);
     for (uint32_t y : tile_rows_)
       for (uint32_t x = 0; x < tw; ++x) {
-        if (kind_of(lists[size_t(y) * tw + x]) != kind) continue;
+        if (tile_kinds_[size_t(y) * tw + x] != kind) continue;
         dst[next++] = glm::uvec4(y * tw + x, x * 8, y * 8, 0);
         ++span.y;
       }
@@ -1251,8 +1250,10 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   const bool boxes = s.model != OpticalModel::kAverage && s.model != OpticalModel::kIsosurface;
   std::optional<CellOpacity> cell_opacity;
   if (skip_cells && boxes) cell_opacity.emplace(s, tf, value_scales_);
-  std::vector<BrickBox> march_world(lod.draw.size());
-  std::vector<uint8_t> walks(lod.draw.size());
+  std::vector<BrickBox>& march_world = march_world_;  // reused: no allocation per view once sizes settle
+  std::vector<uint8_t>& walks = walks_;
+  march_world.resize(lod.draw.size());
+  walks.resize(lod.draw.size());
   // A brick whose box keeps every cell is marched without a cell walk: the
   // walk would find no empty cell (dense 256^3 E-A, `vxr bench roofline`:
   // 0.87 against 1.29-1.33 ms of marching per million samples). A brick with

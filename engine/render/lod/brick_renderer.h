@@ -418,6 +418,9 @@ class BrickRenderer final : public VolumeRenderer {
   gpu::Buffer no_texels_buf_;  // 16 bytes: the stand-in texel view of sets whose rays sample
   gpu::Handle<VkBufferView> no_texels_;
   std::vector<uint32_t> tile_rows_;  // build_tile_lists: the tile rows in dispatch order, kept while the height stays
+  std::vector<uint8_t> tile_kinds_;  // build_tile_lists' scratch: each tile's kind (WorkSpans)
+  std::vector<BrickBox> march_world_;  // record_view's scratch: per drawn brick, the world box its rays march
+  std::vector<uint8_t> walks_;         // record_view's scratch: per drawn brick, whether it walks its cells
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   std::vector<gpu::Buffer> retired_buffers_;  // likewise (a work list that grew)
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
