@@ -301,12 +301,13 @@ vec4 finish_ray(VxrRay r) {
   return vxr_finish(r, P, vec3(0.0), g_dir);
 }
 
-// Empty-space cells (p.pass.y cells per brick axis, p.atlas_inv.w voxels each;
-// 0 cells: off). A cell may be jumped only when no sample in it can change
-// the ray: the shader keeps the samples' grid, so the image is bit-identical
-// with skipping off. The stored ranges cover every voxel a sample within half
-// a voxel of the cell filters, so rounding in a sample's position or in the
-// jump's exit is absorbed.
+// Empty-space cells (p.pass.y cells per brick axis, p.atlas_inv.w voxels each,
+// half a voxel off the voxel grid: shared/brick_params.h; 0 cells: off). A
+// cell may be jumped only when no sample in it can change the ray: the
+// shader keeps the samples' grid, so the image is bit-identical with
+// skipping off. The stored ranges bound every sample within VXR_CELL_BAND of
+// the cell, so rounding in a sample's position or in the jump's exit is
+// absorbed.
 float opaque_entries_upto(int c, int i) { return transfer_table[(VXR_MAX_CHANNELS + c) * VXR_TF_SIZE + i].x; }
 
 // What the cell test needs of a cell's range under the view's window and
@@ -417,7 +418,7 @@ bool cell_is_empty(uint base, int cell, VxrRay r) {
 // indices before the shift (`inv`: 1 / the step's displacement in local voxels).
 float cell_exit(ivec3 cell, vec3 e, vec3 inv, float grow) {
   const float s = p.atlas_inv.w;
-  const vec3 lo = vec3(cell) * s - grow, hi = vec3(cell + 1) * s + grow;
+  const vec3 lo = vec3(cell) * s - 0.5 - grow, hi = vec3(cell + 1) * s - 0.5 + grow;
   // The ray is inside the box: a zero direction component gives +-inf, never 0 * inf.
   const vec3 tmax = max((lo - e) * inv, (hi - e) * inv);
   return min(min(tmax.x, tmax.y), tmax.z);
@@ -636,9 +637,10 @@ void main() {
         const float t = (i0 + float(k) + offset) * dt;  // from the index: no drift
         const float s = p.atlas_inv.w;
         CellWalk w;
-        w.cell = clamp(ivec3(floor((e + t * dl) * inv_cell)), ivec3(0), ivec3(int(p.pass.y) - 1));
+        w.cell = clamp(ivec3(floor((e + t * dl + 0.5) * inv_cell)), ivec3(0), ivec3(int(p.pass.y) - 1));
         // An axis the ray does not move along never bounds it (+inf, never 0 * inf).
-        w.exits = mix(vec3(1.0 / 0.0), (vec3(w.cell + ivec3(greaterThan(dl, vec3(0.0)))) * s - e) * inv_step - shift,
+        w.exits = mix(vec3(1.0 / 0.0),
+                      (vec3(w.cell + ivec3(greaterThan(dl, vec3(0.0)))) * s - 0.5 - e) * inv_step - shift,
                       notEqual(dl, vec3(0.0)));
         const ivec3 step_cell = ivec3(sign(dl));
         const vec3 per_cell = s * abs(inv_step);
@@ -653,9 +655,10 @@ void main() {
           if (!go2 || !walk_inside(w)) break;
         }
         // The empty cells before the run: jump to the first sample at or past
-        // the exit of the last one grown by a quarter voxel; the samples
-        // before it lie within the half voxel the empty cells' ranges cover.
-        const int past_empty = max(k + 1, int(ceil(cell_exit(f.last_empty, e, inv_step, 0.25) - shift)));
+        // the exit of the last one grown by half the band; the samples before
+        // it lie within the band the empty cells' ranges cover.
+        const float grow = 0.5 * VXR_CELL_BAND;
+        const int past_empty = max(k + 1, int(ceil(cell_exit(f.last_empty, e, inv_step, grow) - shift)));
         k = f.skipped ? past_empty : k;
         // Taking samples is always right: the run needs no margin.
         run_end = f.occupied ? min(max(k + 1, int(ceil(f.run_exit))), n) : k;

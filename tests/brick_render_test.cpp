@@ -155,7 +155,7 @@ TEST_CASE("brick render: paged through the pool equals the single-texture path w
 TEST_CASE("brick render: the rays' own filter over texel views matches the sampler's") {
   // On a CPU device the rays filter the atlases' texel views by hand (float
   // weights); elsewhere, and with texel views off, they call the sampler
-  // (lavapipe: 8-bit weights). Same samples; E-A pictures within 1/255,
+  // (lavapipe: 8-bit weights). Same samples for E-A; pictures within 1/255,
   // MIP within 4/255 (a maximum follows the one largest sample, which the
   // sampler's coarse weights move most) and both with an RMSE under 0.2/255.
   test::GpuTestScope scope;
@@ -187,7 +187,12 @@ TEST_CASE("brick render: the rays' own filter over texel views matches the sampl
     CHECK(test::looks_non_blank(a));
     CHECK(d.max_abs <= (s.model == OpticalModel::kMip ? 4 : 1));
     CHECK(d.rmse < 0.2);
-    CHECK(hs.samples == ss.samples);
+    // E-A skips by the transfer function alone: the same samples. MIP skips
+    // a cell by the running maximum, which the two filters move apart a little.
+    if (s.model == OpticalModel::kMip)
+      CHECK(double(hs.samples) == doctest::Approx(double(ss.samples)).epsilon(0.001));
+    else
+      CHECK(hs.samples == ss.samples);
   }
 }
 

@@ -11,10 +11,12 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <tuple>
 
 #include "golden.h"
 #include "gpu_fixture.h"
 #include "render/lod/brick_renderer.h"
+#include "shared/brick_params.h"
 #include "volume/dense_chunk_source.h"
 #include "volume/procedural_source.h"
 
@@ -92,7 +94,9 @@ void check_skipping_keeps_image(BrickRenderer& r, const Camera& cam, const Rende
   CHECK(on.samples < off.samples);
 }
 
-// The direct definition: every texel of the cell's range, as floats, std::min/max from +-inf.
+// The direct definition: every texel a sample inside the cell filters (its
+// core) and one voxel further (its ring), as floats, std::min/max from +-inf;
+// the core's ends moved towards the ring's by the band's weight.
 std::vector<glm::vec2> direct_cell_ranges(VkFormat format, const uint8_t* texels, uint32_t cs, uint32_t apron,
                                           const BrickCells& cells) {
   const uint32_t edge = cs + 2 * apron, n = cells.cells_per_axis, s = cells.cell_size;
@@ -107,24 +111,48 @@ std::vector<glm::vec2> direct_cell_ranges(VkFormat format, const uint8_t* texels
     std::memcpy(&v, texels + 4 * i, 4);
     return v;
   };
-  auto lo_of = [&](uint32_t k) { return uint32_t(std::max<int64_t>(int64_t(k) * s - 1 + apron, 0)); };
-  auto hi_of = [&](uint32_t k) { return uint32_t(std::min<int64_t>(int64_t(k) * s + s + apron, edge - 1)); };
+  auto slot = [&](int64_t v) { return uint32_t(std::clamp<int64_t>(v + apron, 0, edge - 1)); };
+  auto range = [&](uint32_t cx, uint32_t cy, uint32_t cz, int64_t wider) {
+    const glm::i64vec3 c(cx, cy, cz);
+    const glm::uvec3 lo(slot(c.x * s - 1 - wider), slot(c.y * s - 1 - wider), slot(c.z * s - 1 - wider));
+    const glm::uvec3 hi(slot(c.x * s + s - 1 + wider), slot(c.y * s + s - 1 + wider), slot(c.z * s + s - 1 + wider));
+    float l = INFINITY, h = -INFINITY;
+    for (uint32_t z = lo.z; z <= hi.z; ++z)
+      for (uint32_t y = lo.y; y <= hi.y; ++y)
+        for (uint32_t x = lo.x; x <= hi.x; ++x) {
+          const float v = value((size_t(z) * edge + y) * edge + x);
+          l = std::min(l, v);
+          h = std::max(h, v);
+        }
+    return glm::vec2(l, h);
+  };
+  const float w = float(3.0 * VXR_CELL_BAND);
   std::vector<glm::vec2> out(cells.count());
   for (uint32_t cz = 0; cz < n; ++cz)
     for (uint32_t cy = 0; cy < n; ++cy)
       for (uint32_t cx = 0; cx < n; ++cx) {
-        float lo = INFINITY, hi = -INFINITY;
-        for (uint32_t z = lo_of(cz); z <= hi_of(cz); ++z)
-          for (uint32_t y = lo_of(cy); y <= hi_of(cy); ++y)
-            for (uint32_t x = lo_of(cx); x <= hi_of(cx); ++x) {
-              const float v = value((size_t(z) * edge + y) * edge + x);
-              lo = std::min(lo, v);
-              hi = std::max(hi, v);
-            }
+        const glm::vec2 core = range(cx, cy, cz, 0), ring = range(cx, cy, cz, 1);
+        float lo = core.x, hi = core.y;
+        if (ring.x < lo) lo = (1.0f - w) * lo + w * ring.x;
+        if (ring.y > hi) hi = (1.0f - w) * hi + w * ring.y;
         const float pad_lo = std::abs(lo) * 1e-5f + 1e-7f, pad_hi = std::abs(hi) * 1e-5f + 1e-7f;
         out[(size_t(cz) * n + cy) * n + cx] = glm::vec2(lo - pad_lo, hi + pad_hi);
       }
   return out;
+}
+
+// A trilinear sample of one slot at local position p (voxel i's centre at
+// i + 0.5), in double, indices clamped to the slot as the atlas's apron does.
+double trilinear(const std::vector<uint8_t>& texels, uint32_t edge, uint32_t apron, glm::dvec3 p) {
+  const glm::dvec3 a = p + double(apron) - 0.5, f0 = glm::floor(a), f = a - f0;
+  double v = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const glm::ivec3 d(corner & 1, (corner >> 1) & 1, corner >> 2);
+    const glm::ivec3 i = glm::clamp(glm::ivec3(f0) + d, glm::ivec3(0), glm::ivec3(int(edge) - 1));
+    const glm::dvec3 wt = glm::mix(1.0 - f, f, glm::dvec3(d));
+    v += wt.x * wt.y * wt.z * texels[(size_t(i.z) * edge + i.y) * edge + i.x] / 255.0;
+  }
+  return v;
 }
 
 }  // namespace
@@ -170,33 +198,78 @@ TEST_CASE("empty-space cells: the separable min/max equals the direct 3D loop bi
 }
 
 
-TEST_CASE("empty-space cells: ranges cover every voxel a sample within half a voxel of the cell filters") {
-  // One R8 slot, chunk 16, apron 1: 18^3 texels, 2 cells of 8 voxels per axis.
+TEST_CASE("empty-space cells: the grid sits half a voxel off the voxels, and ranges reach the core and the band's share of the ring") {
+  // One R8 slot, chunk 16, apron 1: 18^3 texels, 3 cells of 8 voxels per
+  // axis. Cell k covers local [8k - 0.5, 8k + 7.5): its samples filter voxels
+  // 8k-1 .. 8k+7 (the core); within the band they reach one voxel further.
   const uint32_t cs = 16, apron = 1, edge = cs + 2 * apron;
   const BrickCells cells = brick_cells_for(cs, 8);
-  REQUIRE(cells.cells_per_axis == 2);
+  REQUIRE(cells.cells_per_axis == 3);
   REQUIRE(cells.cell_size == 8);
   std::vector<uint8_t> texels(size_t(edge) * edge * edge, 10);
   auto at = [&](int x, int y, int z) -> uint8_t& {  // local voxel (apron at -1)
     return texels[(size_t(z + apron) * edge + (y + apron)) * edge + (x + apron)];
   };
-  at(8, 3, 3) = 200;   // first voxel of cell (1,0,0): cell (0,0,0) filters it too (its range reaches voxel 8)
-  at(-1, 12, 12) = 0;  // apron voxel: cell (0,1,1) reaches it
   std::vector<glm::vec2> out(cells.count());
+  auto cell = [&](int x, int y, int z) { return out[(size_t(z) * 3 + y) * 3 + x] * 255.0f; };
+  const double w = 3.0 * VXR_CELL_BAND;
+  at(8, 3, 3) = 200;   // core of cell (1,0,0); ring of cell (0,0,0)
+  at(-1, 12, 12) = 0;  // apron voxel: core of cell (0,1,1)
   compute_cell_ranges(VK_FORMAT_R8_UNORM, texels.data(), cs, apron, cells, out.data());
-  auto cell = [&](int x, int y, int z) { return out[(size_t(z) * 2 + y) * 2 + x]; };
-  CHECK(cell(0, 0, 0).y >= 200.0f / 255.0f);
-  CHECK(cell(1, 0, 0).y >= 200.0f / 255.0f);
+  CHECK(cell(1, 0, 0).y >= 200.0f);
+  CHECK(cell(0, 0, 0).y >= 10.0 + w * 190.0);
+  CHECK(cell(0, 0, 0).y < 10.0 + w * 190.0 + 0.01);
   CHECK(cell(0, 1, 1).x <= 0.0f);
-  CHECK(cell(1, 1, 1).x > 9.0f / 255.0f);
-  CHECK(cell(1, 1, 1).y < 11.0f / 255.0f);
-  CHECK(cell(1, 1, 1).y >= 10.0f / 255.0f);  // widened, never narrowed
-  // Voxel 7 is reached from cell 0 only (a sample near 8.5 reads voxels 8 and 9, not 7).
+  CHECK(cell(1, 1, 1).x > 9.99f);
+  CHECK(cell(1, 1, 1).y < 10.01f);
+  CHECK(cell(1, 1, 1).y >= 10.0f);  // widened, never narrowed
+  // Voxel 7 is in both cells' cores (samples on either side of its centre read it); voxel 0 in cell 0's only.
   at(8, 3, 3) = 10;
+  at(7, 3, 3) = 250;
+  compute_cell_ranges(VK_FORMAT_R8_UNORM, texels.data(), cs, apron, cells, out.data());
+  CHECK(cell(0, 0, 0).y >= 250.0f);
+  CHECK(cell(1, 0, 0).y >= 250.0f);
+  at(7, 3, 3) = 10;
   at(0, 3, 3) = 250;
   compute_cell_ranges(VK_FORMAT_R8_UNORM, texels.data(), cs, apron, cells, out.data());
-  CHECK(cell(0, 0, 0).y >= 250.0f / 255.0f);
-  CHECK(cell(1, 0, 0).y < 11.0f / 255.0f);
+  CHECK(cell(0, 0, 0).y >= 250.0f);
+  CHECK(cell(1, 0, 0).y < 10.01f);
+}
+
+TEST_CASE("empty-space cells: every trilinear sample inside a cell or within its band lies in the cell's range") {
+  // Random bright spots on a dim floor; samples at random positions in each
+  // cell grown by the band, filtered in double: none may leave its range.
+  std::mt19937 rng(11);
+  for (const auto& [cs, apron, cell_voxels] : {std::tuple{16u, 1u, 2u}, std::tuple{16u, 2u, 8u}, std::tuple{13u, 1u, 4u}}) {
+    CAPTURE(cs);
+    CAPTURE(cell_voxels);
+    const uint32_t edge = cs + 2 * apron;
+    std::vector<uint8_t> texels(size_t(edge) * edge * edge);
+    for (uint8_t& t : texels) {
+      const uint32_t r = rng();
+      t = uint8_t(r % 13 == 0 ? r >> 24 : r % 5);
+    }
+    const BrickCells cells = brick_cells_for(cs, cell_voxels);
+    std::vector<glm::vec2> out(cells.count());
+    compute_cell_ranges(VK_FORMAT_R8_UNORM, texels.data(), cs, apron, cells, out.data());
+    const uint32_t n = cells.cells_per_axis;
+    const double s = cells.cell_size, band = VXR_CELL_BAND;
+    std::uniform_real_distribution<double> u(-band, s + band);
+    size_t outside = 0, tested = 0;
+    for (uint32_t c = 0; c < cells.count(); ++c) {
+      const glm::dvec3 lo = glm::dvec3(c % n, (c / n) % n, c / (n * n)) * s - 0.5;
+      for (int i = 0; i < 64; ++i) {
+        // Within the brick's samples: local [0, cs) on every axis.
+        const glm::dvec3 p = glm::clamp(lo + glm::dvec3(u(rng), u(rng), u(rng)), 0.0, double(cs) - 1e-9);
+        if (glm::any(glm::lessThan(p, lo - band)) || glm::any(glm::greaterThan(p, lo + s + band))) continue;
+        const double v = trilinear(texels, edge, apron, p);
+        ++tested;
+        if (v < out[c].x || v > out[c].y) ++outside;
+      }
+    }
+    CHECK(tested > 1000);
+    CHECK(outside == 0);
+  }
 }
 
 TEST_CASE("empty-space cells: bit-identical with a gamma and with a transfer function that has gaps") {
@@ -385,15 +458,15 @@ TEST_CASE("empty-space cells: a pool uses 2-voxel cells where the slots its sour
   test::GpuTestScope scope;
   BrickPoolOptions o;
   o.slots = {8, 8, 8};
-  // 128^3 in 32^3 chunks: 64 + 8 + 1 bricks, 73 slots of ranges at 2 voxels (16^3 cells each).
+  // 128^3 in 32^3 chunks: 64 + 8 + 1 bricks, 73 slots of ranges at 2 voxels (17^3 cells each).
   auto small = sparse_vessels(128);
   auto a = BrickPool::create(test::gpu_context(), *small, o);
   REQUIRE(a.is_ok());
   CHECK((*a)->cells().cell_size == 2);
-  CHECK((*a)->cells().cells_per_axis == 16);
-  CHECK((*a)->cell_ranges().size == 73ull * 4096 * sizeof(glm::vec2));
+  CHECK((*a)->cells().cells_per_axis == 17);
+  CHECK((*a)->cell_ranges().size == 73ull * 17 * 17 * 17 * sizeof(glm::vec2));
   // 1024^3 in 64^3 chunks: more bricks than the 512 slots, whose 2-voxel ranges
-  // (512 * 32^3 cells) would pass kMaxCellRangeBytes; 4-voxel ones do not.
+  // (512 * 33^3 cells) would pass kMaxCellRangeBytes; 4-voxel ones do not.
   ProceduralOptions po;
   po.dims = {1024, 1024, 1024};
   po.chunk_size = 64;
@@ -402,7 +475,7 @@ TEST_CASE("empty-space cells: a pool uses 2-voxel cells where the slots its sour
   auto b = BrickPool::create(test::gpu_context(), **big_src, o);
   REQUIRE(b.is_ok());
   CHECK((*b)->cells().cell_size == 4);
-  CHECK((*b)->cell_ranges().size == 512ull * 4096 * sizeof(glm::vec2));
+  CHECK((*b)->cell_ranges().size == 512ull * 17 * 17 * 17 * sizeof(glm::vec2));
 }
 
 namespace {

@@ -11,6 +11,14 @@ using vec4 = glm::vec4;
 using uvec4 = glm::uvec4;
 #endif
 
+// Empty-space cells (BrickCells) sit half a voxel off the voxel grid: cell k
+// of an axis covers local [k * s - 0.5, (k + 1) * s - 0.5), from one voxel
+// centre to another, so a sample inside it filters voxels k*s-1 .. (k+1)*s-1
+// only (s + 1 a side; a grid on the voxel faces reaches s + 2). A cell's
+// stored range also bounds every sample up to VXR_CELL_BAND voxels outside
+// it, which absorbs rounding in the walk and in samples' positions.
+#define VXR_CELL_BAND (1.0 / 64.0)
+
 // pass.z flags
 #define VXR_BRICK_LOAD_ACCUM 1u   // continue the rays from the accumulation image
 #define VXR_BRICK_STORE_ACCUM 2u  // write the rays' state to the accumulation image

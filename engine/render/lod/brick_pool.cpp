@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "core/trace.h"
+#include "shared/brick_params.h"
 #include "shared/raycast_params.h"
 #include "volume/dense_volume.h"
 
@@ -61,8 +62,9 @@ void convert_to_texels(DType dtype, const uint8_t* in, size_t n, uint8_t* out) {
 
 BrickCells brick_cells_for(uint32_t chunk_size, uint32_t cell_voxels) {
   BrickCells c;
-  c.cells_per_axis = std::clamp((chunk_size + cell_voxels - 1) / cell_voxels, 1u, 32u);
-  c.cell_size = (chunk_size + c.cells_per_axis - 1) / c.cells_per_axis;
+  c.cell_size = std::max({cell_voxels, (chunk_size + 31) / 32, 1u});
+  // Cells k = 0 .. n-1 reach local n * s - 0.5: past the chunk's last position.
+  c.cells_per_axis = chunk_size / c.cell_size + 1;
   return c;
 }
 
@@ -138,17 +140,29 @@ template <typename T>
 void cell_ranges_as_float(const T* texels, uint32_t edge, const BrickCells& cells, uint32_t apron, float unorm_max,
                           glm::vec2* out) {
   const uint32_t n = cells.cells_per_axis, s = cells.cell_size;
-  // Slot texel range of cell k along an axis: local voxels k*s - 1 .. k*s + s, clipped to the slot.
-  std::vector<uint32_t> lo(n), hi(n);
+  // Slot texel ranges of cell k along an axis, clipped to the slot: the
+  // voxels a sample inside it filters (local k*s - 1 .. k*s + s - 1), and
+  // those one voxel further, which a sample within the band filters too.
+  const auto clip = [&](int64_t v) { return uint32_t(std::clamp<int64_t>(v + apron, 0, edge - 1)); };
+  std::vector<uint32_t> lo(n), hi(n), ring_lo(n), ring_hi(n);
   for (uint32_t k = 0; k < n; ++k) {
-    lo[k] = uint32_t(std::max<int64_t>(int64_t(k) * s - 1 + apron, 0));
-    hi[k] = uint32_t(std::min<int64_t>(int64_t(k) * s + s + apron, edge - 1));
+    lo[k] = clip(int64_t(k) * s - 1);
+    hi[k] = clip(int64_t(k) * s + s - 1);
+    ring_lo[k] = clip(int64_t(k) * s - 2);
+    ring_hi[k] = clip(int64_t(k) * s + s);
   }
-  std::vector<T> mn, mx;
+  std::vector<T> mn, mx, ring_mn, ring_mx;
   cell_min_max(texels, edge, n, lo, hi, mn, mx);
+  cell_min_max(texels, edge, n, ring_lo, ring_hi, ring_mn, ring_mx);
+  // A sample up to `band` outside the cell gives the ring at most that much
+  // of its weight per axis, 1 - (1 - band)^3 < 3 * band in all.
+  const float ring_weight = float(3.0 * VXR_CELL_BAND);
   for (size_t i = 0; i < mn.size(); ++i) {
     // Texel to float is monotone, so the float of the extreme texel is the extreme float.
-    const float l = float(mn[i]) / unorm_max, h = float(mx[i]) / unorm_max;
+    float l = float(mn[i]) / unorm_max, h = float(mx[i]) / unorm_max;
+    const float rl = float(ring_mn[i]) / unorm_max, rh = float(ring_mx[i]) / unorm_max;
+    if (rl < l) l = (1.0f - ring_weight) * l + ring_weight * rl;
+    if (rh > h) h = (1.0f - ring_weight) * h + ring_weight * rh;
     // Filtering mixes values with rounded weights: widen by far more than its rounding.
     const float pad_lo = std::abs(l) * 1e-5f + 1e-7f, pad_hi = std::abs(h) * 1e-5f + 1e-7f;
     out[i] = glm::vec2(l - pad_lo, h + pad_hi);

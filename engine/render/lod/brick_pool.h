@@ -114,20 +114,23 @@ double brick_value_scale(DType dtype);
 // `n` native voxels -> atlas texels of brick_texel_format(dtype).
 void convert_to_texels(DType dtype, const uint8_t* in, size_t n, uint8_t* out);
 
-// Empty-space cells inside a brick: each slot's interior is cut into
-// cells_per_axis^3 cells of cell_size voxels (the last one per axis may be
-// shorter), and for each cell the pool keeps the min and max texel value
-// (atlas texel units, per channel) over every voxel a trilinear sample taken
-// within half a voxel of the cell reaches: cell voxels -1 .. cell_size (clipped
-// to the slot). The ranges do not depend on the transfer function; the ray
-// caster classifies them per frame and jumps over cells that cannot change a
-// pixel (brick_raycast.comp). Filled at upload, from the staged texels.
+// Empty-space cells inside a brick: cells_per_axis^3 cells of cell_size
+// voxels, half a voxel off the voxel grid (cell k of an axis covers local
+// [k * s - 0.5, (k + 1) * s - 0.5): shared/brick_params.h), so one more per
+// axis than the chunk holds cells. For each cell the pool keeps the min and
+// max texel value (atlas texel units, per channel) a trilinear sample inside
+// the cell can take: over voxels k*s-1 .. (k+1)*s-1, widened towards the ring
+// of voxels around them by the most a sample up to VXR_CELL_BAND outside the
+// cell mixes in (3 * band of its weight). The ranges do not depend on the
+// transfer function; the ray caster classifies them per frame and jumps over
+// cells that cannot change a pixel (brick_raycast.comp). Filled at upload,
+// from the staged texels.
 struct BrickCells {
   uint32_t cells_per_axis = 1;
   uint32_t cell_size = 8;  // voxels
   uint32_t count() const { return cells_per_axis * cells_per_axis * cells_per_axis; }
 };
-// About `cell_voxels` voxels per cell, at most 32 cells per axis. The pool
+// About `cell_voxels` voxels per cell, at most 33 cells per axis. The pool
 // uses the finest of 2, 4 and 8 whose ranges (every slot it hands out, every
 // channel) fit kMaxCellRangeBytes: it hands out no more slots than the
 // source has bricks, so a small volume gets 2. Measured with `vxr bench
@@ -137,9 +140,9 @@ BrickCells brick_cells_for(uint32_t chunk_size, uint32_t cell_voxels = 4);
 // The most the cell ranges of a pool may take (a storage buffer; lavapipe's range limit is 128 MiB).
 constexpr uint64_t kMaxCellRangeBytes = 64ull << 20;
 // The ranges of one channel of a slot (`texels`: edge^3 in `format`, edge =
-// chunk_size + 2 * apron) into out[count()] as (min, max), widened by a few
-// ulps so that a filtered value, however the device rounds its weights, lies
-// inside its cell's range.
+// chunk_size + 2 * apron, apron >= 1) into out[count()] as (min, max), also
+// widened by a few ulps so that a filtered value, however the device rounds
+// its weights, lies inside its cell's range.
 void compute_cell_ranges(VkFormat format, const uint8_t* texels, uint32_t chunk_size, uint32_t apron,
                          const BrickCells& cells, glm::vec2* out);
 

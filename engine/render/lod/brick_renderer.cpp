@@ -665,8 +665,9 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
   }
   if (!cells) return m;
   // Samples outside the kept cells lie in cells whose ranges cover every
-  // voxel they filter: zero opacity, nothing to add (a sample within rounding
-  // of the box's face is within half a voxel of such a cell too).
+  // voxel they filter: zero opacity, nothing to add. The box of the kept
+  // cells grows by half the cells' band: a sample within rounding of its face
+  // is within the band of such a cell too.
   const uint32_t slot = pool_->slot_of(key);
   if (occupied_.size() != pool_->capacity()) occupied_.assign(pool_->capacity(), {});
   OccupiedCells& oc = occupied_[slot];
@@ -712,9 +713,10 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
     oc = {key, cells->hash(), lo, hi, {split, boxed, all_kept}};
   }
   if (facts) *facts = oc.facts;
-  const double s = pool_->cells().cell_size;
-  m.lo = glm::max(m.lo, glm::dvec3(oc.lo) * s);
-  m.hi = glm::min(m.hi, glm::dvec3(oc.hi) * s);
+  // Cell k of an axis covers [k * s - 0.5, (k + 1) * s - 0.5) (shared/brick_params.h).
+  const double s = pool_->cells().cell_size, grow = 0.5 * VXR_CELL_BAND;
+  m.lo = glm::max(m.lo, glm::dvec3(oc.lo) * s - 0.5 - grow);
+  m.hi = glm::min(m.hi, glm::dvec3(oc.hi) * s - 0.5 + grow);
   return m;
 }
 
