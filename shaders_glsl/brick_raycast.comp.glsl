@@ -595,6 +595,10 @@ void main() {
     const uint b = subgroupBroadcastFirst(tile_lists ? items[j].x : j);
     const BrickRecord br = brick_record(b);
     if (!item_mode && !segment(br, dir, t0, t1)) continue;
+    // One-channel E-A carries its transparency as a product within a brick;
+    // each brick starts it again from the optical depth, as a multipass
+    // wave's ray does (unpack_ray), so every dispatch mode gives one image.
+    if (VXR_SC_CHANNELS == 1 && VXR_SC_MODEL == VXR_MODEL_EMISSION_ABSORPTION) ray.trans = exp(-ray.tau.x);
     const vec3 e = br.eye.xyz;
     g_atlas_origin = br.atlas.xyz;
     const vec3 dl = dir * br.scale.xyz;

@@ -111,7 +111,7 @@ struct VxrRay {
   float prev_value;            // isosurface: previous value of the iso channel (< 0: none yet)
   float prev_t;
   float hit_t;                 // isosurface: ray parameter of the first crossing (< 0: none)
-  float trans;                 // one channel, additive EA: exp(-tau.x), kept from the last termination test
+  float trans;                 // one channel, additive EA: the transparency so far (exp(-tau.x) at a brick's start, then the steps' product)
   float density;               // extinction at TF opacity 1 per unit of t (vxr_ray_density)
   bool done;                   // early termination or surface found
 };
@@ -202,10 +202,17 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
       r.acc[c].rgb += color * tau;
     } else if (VXR_SC_BLEND == VXR_BLEND_ADDITIVE) {
       tau = vxr_segment_depth(P, tau);
-      // One channel: exp(-tau so far) is what the last step's termination test computed.
+      // One channel: the transparency so far is r.trans, and this segment's
+      // exp(-tau) both gives its opacity and carries r.trans on: one exp a
+      // step, where exp(-tau so far) took a second (dense E-A frame on
+      // lavapipe 138.5 -> 130.5 ms). The product is front-to-back
+      // compositing's (1 - A); the brick marcher restarts it from tau at
+      // each brick, and the pixel's alpha comes from tau, not from it.
       const float trans = n == 1 ? r.trans : exp(-r.tau[c]);
-      r.acc[c].rgb += trans * vxr_opacity(tau) * color;
+      const float through = exp(-tau);
+      r.acc[c].rgb += trans * (tau < 1e-3 ? tau * (1.0 - 0.5 * tau) : 1.0 - through) * color;
       r.tau[c] += tau;
+      if (n == 1) r.trans = trans * through;
     } else {
       mix_color += tau * color;
       mix_tau += tau;
@@ -219,10 +226,12 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
     r.tau.x += seg_tau;
     r.done = exp(-r.tau.x) <= P.march.z;
   } else {
-    float tmin = 1e30;
-    for (int c = 0; c < n; ++c)
-      if (P.window[c].w != 0.0) tmin = min(tmin, r.tau[c]);
-    r.trans = exp(-tmin);  // one channel: exp(-tau.x), reused by the next step
+    if (n > 1) {
+      float tmin = 1e30;
+      for (int c = 0; c < n; ++c)
+        if (P.window[c].w != 0.0) tmin = min(tmin, r.tau[c]);
+      r.trans = exp(-tmin);
+    }
     r.done = r.trans <= P.march.z;  // every channel is (nearly) opaque
   }
 }
