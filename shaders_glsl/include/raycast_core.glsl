@@ -56,8 +56,10 @@ void vxr_transfer_index(float x, out int i, out float f) {
   f = u - float(i);
 }
 
-// 1 - exp(-tau), with the series for small tau so faint tissue survives float32.
-float vxr_opacity(float tau) { return tau < 1e-3 ? tau * (1.0 - 0.5 * tau) : 1.0 - exp(-tau); }
+// 1 - exp(-tau), with the series for small tau so faint tissue survives
+// float32; `through`: exp(-tau), where the caller has it already.
+float vxr_opacity(float tau, float through) { return tau < 1e-3 ? tau * (1.0 - 0.5 * tau) : 1.0 - through; }
+float vxr_opacity(float tau) { return vxr_opacity(tau, exp(-tau)); }
 
 // The naive linear opacity correction (settings.opacity_correction = false):
 // a segment's opacity is its optical depth, clamped to 1. Returned as the
@@ -210,7 +212,7 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
       // each brick, and the pixel's alpha comes from tau, not from it.
       const float trans = n == 1 ? r.trans : exp(-r.tau[c]);
       const float through = exp(-tau);
-      r.acc[c].rgb += trans * (tau < 1e-3 ? tau * (1.0 - 0.5 * tau) : 1.0 - through) * color;
+      r.acc[c].rgb += trans * vxr_opacity(tau, through) * color;
       r.tau[c] += tau;
       if (n == 1) r.trans = trans * through;
     } else {
