@@ -391,6 +391,38 @@ TEST_CASE("empty-space cells: a brick that keeps every cell is marched without a
   }
 }
 
+TEST_CASE("empty-space cells: bricks seen from kCellEyeLimit voxels away or more march without cells, with the same image") {
+  // Float positions that far from the eye are too coarse for the cells'
+  // band: such bricks march their whole box. Near the limit they still walk.
+  test::GpuTestScope scope;
+  auto src = sparse_vessels(64);
+  auto made = small_pool_renderer(*src);
+  BrickRenderer& r = *made;
+  const double diag = glm::length(r.placement().extent());
+  BrickFrameSettings f;
+  f.lod.force_level = 0;
+  const RenderSettings s = vessel_settings(OpticalModel::kEmissionAbsorption);
+  for (const double eye_voxels : {0.5 * BrickRenderer::kCellEyeLimit, 2.0 * BrickRenderer::kCellEyeLimit}) {
+    // The volume fills about half the view at that distance.
+    const double fov = glm::degrees(2.0 * std::atan(diag / eye_voxels));
+    const Camera cam = orbit_camera(r.placement(), 30, 25, eye_voxels / diag, fov);
+    BrickFrameStats on, off;
+    const ImageRgba8 a = converge(r, cam, s, f, 64, 64, &on);
+    f.lod.skip_empty = false;
+    const ImageRgba8 b = converge(r, cam, s, f, 64, 64, &off);
+    f.lod.skip_empty = true;
+    INFO("eye " << eye_voxels << " voxels away: walked " << on.bricks_walked << " of " << on.lod.drawn);
+    CHECK(test::looks_non_blank(a));
+    CHECK(a.pixels == b.pixels);
+    if (eye_voxels < BrickRenderer::kCellEyeLimit) {
+      CHECK(on.bricks_walked > 0);
+      CHECK(on.samples < off.samples);
+    } else {
+      CHECK(on.bricks_walked == 0);  // (empty bricks are still dropped whole: their test holds at any distance)
+    }
+  }
+}
+
 TEST_CASE("empty-space cells: images with skipping on and off are bit-identical for every model that skips") {
   test::GpuTestScope scope;
   auto src = sparse_vessels(128);

@@ -1267,9 +1267,16 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   for (size_t i = 0; i < lod.draw.size(); ++i) {
     const ChunkKey& key = lod.draw[i];
     const glm::uvec3 o = pool_->touch(key);
+    // Cells skip by ranges that hold within VXR_CELL_BAND of each cell. A
+    // brick whose eye lies kCellEyeLimit or more of its voxels away has its
+    // samples' and walks' positions rounded too coarsely for that (a few
+    // ulps of 8192 are 0.004 voxel): it marches its whole box, without a walk.
+    const auto& ds_key = src_.levels()[key.level].downsample;
+    const glm::dvec3 local_eye = (view.eye - chunk_box(src_, key).lo) / glm::dvec3(ds_key[0], ds_key[1], ds_key[2]);
+    const bool near = glm::all(glm::lessThan(glm::abs(local_eye), glm::dvec3(kCellEyeLimit)));
     CellFacts facts;
-    const BrickBox local = march_box(key, frame.lod, cell_opacity ? &*cell_opacity : nullptr, &facts);
-    const bool walk = reduce || !facts.all_kept;
+    const BrickBox local = march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts);
+    const bool walk = near && (reduce || !facts.all_kept);
     walks[i] = walk;
     fill_record(static_cast<uint8_t*>(table_.mapped) + table_base + i * sizeof(shader::BrickRecord), key,
                 glm::vec3(o), view, frame.lod, local, walk);

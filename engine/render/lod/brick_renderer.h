@@ -190,6 +190,11 @@ std::string format_stats(const BrickFrameStats& s);
 
 class BrickRenderer final : public VolumeRenderer {
  public:
+  // Bricks whose eye is this many of their voxels away, or more (on any
+  // axis), march without empty-space cells: float positions there are too
+  // coarse for the cells' band (record_view).
+  static constexpr double kCellEyeLimit = 8192.0;
+
   static Result<std::unique_ptr<BrickRenderer>> create(gpu::Context& ctx, const ChunkSource& source,
                                                        const BrickRendererOptions& options = {});
 
