@@ -25,8 +25,8 @@ std::unique_ptr<ProceduralSource> make(uint64_t side, uint32_t noise = 6) {
   return std::move(r).value();
 }
 
-std::unique_ptr<BrickRenderer> renderer(const ChunkSource& src) {
-  BrickRendererOptions o;
+// A renderer with an 8^3-slot pool; `o`: whatever else a test changes.
+std::unique_ptr<BrickRenderer> renderer(const ChunkSource& src, BrickRendererOptions o = {}) {
   o.pool.slots = {8, 8, 8};
   auto r = BrickRenderer::create(test::gpu_context(), src, o);
   REQUIRE(r.is_ok());
@@ -162,11 +162,8 @@ TEST_CASE("brick render: the rays' own filter over texel views matches the sampl
   auto src = make(128);
   auto hand = renderer(*src);
   BrickRendererOptions o;
-  o.pool.slots = {8, 8, 8};
   o.pool.texel_views = false;
-  auto made = BrickRenderer::create(test::gpu_context(), *src, o);
-  REQUIRE(made.is_ok());
-  auto sampled = std::move(made).value();
+  auto sampled = renderer(*src, o);
   if (test::gpu_context().info().type == VK_PHYSICAL_DEVICE_TYPE_CPU) {
     CHECK(hand->pool().atlas_texels_view() != nullptr);
     CHECK(hand->pool().pairs());  // u8: texel pairs, 4 loads a sample

@@ -41,8 +41,9 @@ RenderSettings vessels() {
   return s;
 }
 
-std::unique_ptr<BrickRenderer> make_renderer(const ChunkSource& src, ChunkCache* cache = nullptr) {
-  BrickRendererOptions o;
+// An 8^3-slot pool streaming from `cache` (none: loads in the frame); `o`: whatever else a test changes.
+std::unique_ptr<BrickRenderer> make_renderer(const ChunkSource& src, ChunkCache* cache = nullptr,
+                                             BrickRendererOptions o = {}) {
   o.pool.slots = {8, 8, 8};
   o.stream_from = cache;
   auto r = BrickRenderer::create(test::gpu_context(), src, o);
@@ -230,11 +231,9 @@ TEST_CASE("volume renderer: views that need a longer work list than it was made 
   auto src = vessels_source(128);
   auto roomy = make_renderer(*src);
   BrickRendererOptions o;
-  o.pool.slots = {8, 8, 8};
   o.max_work_items = 40;  // a 32x32 view alone needs more (16 tiles, twice, and their brick lists)
-  auto made = BrickRenderer::create(test::gpu_context(), *src, o);
-  REQUIRE(made.is_ok());
-  BrickRenderer& tight = **made;
+  auto made = make_renderer(*src, nullptr, o);
+  BrickRenderer& tight = *made;
   const Camera left = orbit_camera(roomy->placement(), 10, 0), right = orbit_camera(roomy->placement(), 80, 30);
   const ImageRgba8 a = converged(*roomy, left, vessels(), 32, 32), b = converged(*roomy, right, vessels(), 32, 32);
   RenderTarget l, rr;

@@ -1271,8 +1271,9 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     // brick whose eye lies kCellEyeLimit or more of its voxels away has its
     // samples' and walks' positions rounded too coarsely for that (a few
     // ulps of 8192 are 0.004 voxel): it marches its whole box, without a walk.
-    const auto& ds_key = src_.levels()[key.level].downsample;
-    const glm::dvec3 local_eye = (view.eye - chunk_box(src_, key).lo) / glm::dvec3(ds_key[0], ds_key[1], ds_key[2]);
+    const auto& ds_u = src_.levels()[key.level].downsample;
+    const glm::dvec3 ds(ds_u[0], ds_u[1], ds_u[2]), origin = chunk_box(src_, key).lo;
+    const glm::dvec3 local_eye = (view.eye - origin) / ds;
     const bool near = glm::all(glm::lessThan(glm::abs(local_eye), glm::dvec3(kCellEyeLimit)));
     CellFacts facts;
     const BrickBox local = march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts);
@@ -1285,8 +1286,6 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
       groups += facts.boxed_groups;
       ++st.bricks_walked;
     }
-    const auto& ds_u = src_.levels()[key.level].downsample;
-    const glm::dvec3 ds(ds_u[0], ds_u[1], ds_u[2]), origin = chunk_box(src_, key).lo;
     march_world[i] = {origin + local.lo * ds, origin + local.hi * ds};
   }
   // kAuto: tiled on every device, as measured (brick_renderer.h).
