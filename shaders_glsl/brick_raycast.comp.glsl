@@ -560,6 +560,7 @@ void main() {
   }
   const vec3 raw_dir = P.forward.xyz + ndc.x * P.right.xyz - ndc.y * P.up.xyz;
   vec3 dir = normalize(raw_dir);
+  const float ray_len = length(raw_dir);  // t units per unit of view depth
   g_dir = dir;
   const bool underlay = (flags & VXR_BRICK_UNDERLAY) != 0u;
   // A view depth z lies at t = z * |raw_dir| (raw_dir has unit view depth), as in the CPU reference.
@@ -592,9 +593,16 @@ void main() {
     // workgroup's, and a ray that ends leaves the loop): the broadcast says
     // so, for compilers that then load the record once per subgroup (GPUs'
     // scalar loads; lavapipe still gathers, see brick_record).
-    const uint b = subgroupBroadcastFirst(tile_lists ? items[j].x : j);
+    const uvec4 entry = tile_lists ? items[j] : uvec4(j, 0u, 0u, 0u);
+    const uint b = subgroupBroadcastFirst(entry.x);
     const BrickRecord br = brick_record(b);
     if (!item_mode && !segment(br, dir, t0, t1)) continue;
+    if (tile_lists) {
+      // The view depths the brick's kept cells span in this tile (build_tile_lists).
+      t0 = max(t0, uintBitsToFloat(entry.y) * ray_len);
+      t1 = min(t1, uintBitsToFloat(entry.z) * ray_len);
+      if (!(t1 > t0)) continue;
+    }
     // One-channel E-A carries its transparency as a product within a brick;
     // each brick starts it again from the optical depth, as a multipass
     // wave's ray does (unpack_ray), so every dispatch mode gives one image.

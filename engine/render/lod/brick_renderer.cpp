@@ -653,8 +653,12 @@ Status BrickRenderer::ensure_timepoint(uint32_t timepoint) {
   return Status::ok();
 }
 
+namespace {
+bool is_empty(const BrickBox& b) { return !(b.lo.x < b.hi.x && b.lo.y < b.hi.y && b.lo.z < b.hi.z); }
+}  // namespace
+
 BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells,
-                                  CellFacts* facts) {
+                                  CellFacts* facts, std::vector<BrickBox>* blocks) {
   const BrickBox box = chunk_box(src_, key);
   const auto& ds_u = src_.levels()[key.level].downsample;
   const glm::dvec3 ds(ds_u[0], ds_u[1], ds_u[2]);
@@ -710,13 +714,36 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
     const bool any = glm::all(glm::lessThan(lo, hi));
     const uint32_t boxed = any ? (ghi.x - glo.x) * (ghi.y - glo.y) * (ghi.z - glo.z) : 0;
     const bool all_kept = any && kept_count == (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
-    oc = {key, cells->hash(), lo, hi, {split, boxed, all_kept}};
+    oc = {key, cells->hash(), lo, hi, {split, boxed, all_kept}, {}};
+    // Blocks of kBlockCells^3 cells: the tight box of each one's kept cells.
+    const uint32_t bc = kBlockCells, nb = (n + bc - 1) / bc;
+    for (uint32_t bz = 0; bz < nb; ++bz)
+      for (uint32_t by = 0; by < nb; ++by)
+        for (uint32_t bx = 0; bx < nb; ++bx) {
+          glm::uvec3 blo(n), bhi(0);
+          for (uint32_t z = bz * bc; z < std::min(n, bz * bc + bc); ++z)
+            for (uint32_t y = by * bc; y < std::min(n, by * bc + bc); ++y)
+              for (uint32_t x = bx * bc; x < std::min(n, bx * bc + bc); ++x)
+                if (kept[(z * n + y) * n + x]) {
+                  blo = glm::min(blo, glm::uvec3(x, y, z));
+                  bhi = glm::max(bhi, glm::uvec3(x, y, z) + 1u);
+                }
+          if (glm::all(glm::lessThan(blo, bhi))) oc.blocks.push_back({glm::dvec3(blo), glm::dvec3(bhi)});
+        }
   }
   if (facts) *facts = oc.facts;
   // Cell k of an axis covers [k * s - 0.5, (k + 1) * s - 0.5) (shared/brick_params.h).
   const double s = pool_->cells().cell_size, grow = 0.5 * VXR_CELL_BAND;
+  const BrickBox whole = m;
   m.lo = glm::max(m.lo, glm::dvec3(oc.lo) * s - 0.5 - grow);
   m.hi = glm::min(m.hi, glm::dvec3(oc.hi) * s - 0.5 + grow);
+  if (blocks) {
+    blocks->clear();
+    for (const BrickBox& b : oc.blocks) {
+      BrickBox v{glm::max(whole.lo, b.lo * s - 0.5 - grow), glm::min(whole.hi, b.hi * s - 0.5 + grow)};
+      if (!is_empty(v)) blocks->push_back(v);
+    }
+  }
   return m;
 }
 
@@ -946,7 +973,6 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
 }
 
 namespace {
-bool is_empty(const BrickBox& b) { return !(b.lo.x < b.hi.x && b.lo.y < b.hi.y && b.lo.z < b.hi.z); }
 
 // 0..n-1 in bit-reversed order (0, n/2, n/4, 3n/4, ... for n a power of
 // two): every contiguous share of the sequence samples the whole range.
@@ -963,25 +989,46 @@ std::vector<uint32_t> interleaved_rows(uint32_t n) {
   return out;
 }
 
-// Screen rectangle (pixels) a box covers; the whole image when it reaches behind the eye.
-glm::uvec4 screen_rect(const BrickBox& b, const LodView& v) {
-  const glm::dmat3 basis(v.forward, v.right, v.up);
-  const glm::dmat3 inv = glm::inverse(basis);
-  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-  for (int c = 0; c < 8; ++c) {
-    const glm::dvec3 p((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z);
-    const glm::dvec3 k = inv * (p - v.eye);  // p - eye = k.x f + k.y r + k.z u
-    if (k.x <= 1e-9) return {0, 0, v.width, v.height};
-    const double nx = k.y / k.x, ny = -k.z / k.x;
-    x0 = std::min(x0, nx), x1 = std::max(x1, nx), y0 = std::min(y0, ny), y1 = std::max(y1, ny);
+// Where world boxes fall in a view: the screen rectangle (pixels) a box
+// covers, the whole image when it reaches behind the eye, and the view
+// depths it spans (ray lengths in units of forward; from 0 when it reaches
+// behind the eye). Built once per view: the tile lists project every kept
+// block of every walked brick.
+class ScreenBoxes {
+ public:
+  explicit ScreenBoxes(const LodView& v) : v_(v), inv_(glm::inverse(glm::dmat3(v.forward, v.right, v.up))) {}
+
+  glm::uvec4 rect(const BrickBox& b, glm::dvec2* depth = nullptr) const {
+    // p - eye = k.x f + k.y r + k.z u, affine in p: the corners from one and the edges.
+    const glm::dvec3 k0 = inv_ * (b.lo - v_.eye), size = b.hi - b.lo;
+    const glm::dvec3 ex = inv_[0] * size.x, ey = inv_[1] * size.y, ez = inv_[2] * size.z;
+    double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300, d0 = 1e300, d1 = -1e300;
+    bool behind = false;
+    for (int c = 0; c < 8; ++c) {
+      const glm::dvec3 k = k0 + ((c & 1) ? ex : glm::dvec3(0.0)) + ((c & 2) ? ey : glm::dvec3(0.0)) +
+                           ((c & 4) ? ez : glm::dvec3(0.0));
+      d0 = std::min(d0, k.x), d1 = std::max(d1, k.x);
+      if (k.x <= 1e-9) {
+        behind = true;
+        continue;
+      }
+      const double nx = k.y / k.x, ny = -k.z / k.x;
+      x0 = std::min(x0, nx), x1 = std::max(x1, nx), y0 = std::min(y0, ny), y1 = std::max(y1, ny);
+    }
+    if (depth) *depth = glm::dvec2(std::max(d0, 0.0), d1);
+    if (behind) return {0, 0, v_.width, v_.height};
+    auto px = [](double ndc, uint32_t n) { return (ndc + 1.0) * 0.5 * n - 0.5; };
+    const double ax = std::clamp(std::floor(px(x0, v_.width)) - 1, 0.0, double(v_.width));
+    const double bx = std::clamp(std::ceil(px(x1, v_.width)) + 2, 0.0, double(v_.width));
+    const double ay = std::clamp(std::floor(px(y0, v_.height)) - 1, 0.0, double(v_.height));
+    const double by = std::clamp(std::ceil(px(y1, v_.height)) + 2, 0.0, double(v_.height));
+    return {uint32_t(ax), uint32_t(ay), uint32_t(bx - ax), uint32_t(by - ay)};
   }
-  auto px = [](double ndc, uint32_t n) { return (ndc + 1.0) * 0.5 * n - 0.5; };
-  const double ax = std::clamp(std::floor(px(x0, v.width)) - 1, 0.0, double(v.width));
-  const double bx = std::clamp(std::ceil(px(x1, v.width)) + 2, 0.0, double(v.width));
-  const double ay = std::clamp(std::floor(px(y0, v.height)) - 1, 0.0, double(v.height));
-  const double by = std::clamp(std::ceil(px(y1, v.height)) + 2, 0.0, double(v.height));
-  return {uint32_t(ax), uint32_t(ay), uint32_t(bx - ax), uint32_t(by - ay)};
-}
+
+ private:
+  const LodView& v_;
+  glm::dmat3 inv_;
+};
 
 // The warped-grid pixels covering full-image rectangle r (identity without a warp).
 glm::uvec4 warp_rect(const glm::uvec4& r, const WarpAxis& ax, const WarpAxis& ay) {
@@ -1019,6 +1066,7 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Bri
     rays_for_ = std::make_tuple(view.forward, view.right, view.up);
   }
   pixel_wave_.assign(size_t(w) * h, 0);
+  const ScreenBoxes screen(view);
   std::vector<uint8_t> tile_hit(size_t(tw) * th, 0);
   struct Item {
     uint32_t wave, brick, tx, ty;
@@ -1028,7 +1076,7 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Bri
   std::vector<uint32_t> hit_pixels;
   for (uint32_t b = 0; b < boxes.size(); ++b) {
     if (is_empty(boxes[b])) continue;
-    const glm::uvec4 r = warp_rect(screen_rect(boxes[b], view), ax, ay);
+    const glm::uvec4 r = warp_rect(screen.rect(boxes[b]), ax, ay);
     if (r.z == 0 || r.w == 0) continue;
     BrickBox box = boxes[b];
     const glm::dvec3 grow = 1e-3 * (box.hi - box.lo);
@@ -1077,17 +1125,52 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Bri
 }
 
 Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
+                                       const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
                                        const LodView& view, const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst,
                                        size_t capacity, size_t* used, WorkSpans* spans) {
   const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
-  std::vector<std::vector<uint32_t>> lists(size_t(tw) * th);
+  struct Entry {
+    uint32_t brick;
+    glm::vec2 depth;  // view depths its rays march there
+  };
+  std::vector<std::vector<Entry>> lists(size_t(tw) * th);
+  std::vector<glm::dvec2> depths;
+  const ScreenBoxes screen(view);
   size_t total = lists.size();
+  const glm::vec2 all_depths(0.0f, std::numeric_limits<float>::infinity());
   for (uint32_t b = 0; b < boxes.size(); ++b) {
     if (is_empty(boxes[b])) continue;
-    const glm::uvec4 r = warp_rect(screen_rect(boxes[b], view), ax, ay);
+    const glm::uvec4 r = warp_rect(screen.rect(boxes[b]), ax, ay);
     if (r.z == 0 || r.w == 0) continue;
-    for (uint32_t y = r.y / 8; y <= (r.y + r.w - 1) / 8; ++y)
-      for (uint32_t x = r.x / 8; x <= (r.x + r.z - 1) / 8; ++x) lists[size_t(y) * tw + x].push_back(b);
+    const glm::uvec2 t0 = glm::uvec2(r.x, r.y) / 8u, t1 = (glm::uvec2(r.x + r.z, r.y + r.w) - 1u) / 8u;
+    if (blocks[b].y == blocks[b].x) {
+      for (uint32_t y = t0.y; y <= t1.y; ++y)
+        for (uint32_t x = t0.x; x <= t1.x; ++x) lists[size_t(y) * tw + x].push_back({b, all_depths});
+      continue;
+    }
+    // Per tile of the brick's rectangle, the depths its blocks span there.
+    const uint32_t rw = t1.x - t0.x + 1;
+    depths.assign(size_t(rw) * (t1.y - t0.y + 1), glm::dvec2(1e300, -1e300));
+    for (uint32_t i = blocks[b].x; i < blocks[b].y; ++i) {
+      glm::dvec2 d;
+      const glm::uvec4 q = warp_rect(screen.rect(block_boxes[i], &d), ax, ay);
+      if (q.z == 0 || q.w == 0) continue;
+      const glm::uvec2 q0 = glm::max(glm::uvec2(q.x, q.y) / 8u, t0);
+      const glm::uvec2 q1 = glm::min((glm::uvec2(q.x + q.z, q.y + q.w) - 1u) / 8u, t1);
+      for (uint32_t y = q0.y; y <= q1.y; ++y)
+        for (uint32_t x = q0.x; x <= q1.x; ++x) {
+          glm::dvec2& e = depths[size_t(y - t0.y) * rw + (x - t0.x)];
+          e = glm::dvec2(std::min(e.x, d.x), std::max(e.y, d.y));
+        }
+    }
+    for (uint32_t y = t0.y; y <= t1.y; ++y)
+      for (uint32_t x = t0.x; x <= t1.x; ++x) {
+        const glm::dvec2 e = depths[size_t(y - t0.y) * rw + (x - t0.x)];
+        if (!(e.x <= e.y)) continue;  // no block here: its rays would find every cell empty
+        // Widened well past float rounding of the rays' depths.
+        const double margin = 1e-4 * e.y + 1e-3;
+        lists[size_t(y) * tw + x].push_back({b, glm::vec2(float(std::max(0.0, e.x - margin)), float(e.y + margin))});
+      }
   }
   for (const auto& l : lists) total += l.size();
   total += lists.size();  // each tile once more, among those with bricks or those without
@@ -1103,9 +1186,9 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
   uint32_t next = static_cast<uint32_t>(lists.size());
   for (size_t t = 0; t < lists.size(); ++t) {
     dst[t] = glm::uvec4(next, uint32_t(lists[t].size()), 0, 0);
-    for (uint32_t b : lists[t]) {
-      dst[next++] = glm::uvec4(b, 0, 0, 0);
-      tile_kinds_[t] = walks[b] ? uint8_t(kMarched) : std::min<uint8_t>(tile_kinds_[t], kPlain);
+    for (const Entry& e : lists[t]) {
+      dst[next++] = glm::uvec4(e.brick, glm::floatBitsToUint(e.depth.x), glm::floatBitsToUint(e.depth.y), 0);
+      tile_kinds_[t] = walks[e.brick] ? uint8_t(kMarched) : std::min<uint8_t>(tile_kinds_[t], kPlain);
     }
   }
   // Then the tiles as workgroups, by kind, in an order that spreads the
@@ -1256,6 +1339,9 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   std::vector<uint8_t>& walks = walks_;
   march_world.resize(lod.draw.size());
   walks.resize(lod.draw.size());
+  blocks_.assign(lod.draw.size(), glm::uvec2(0));
+  block_world_.clear();
+  std::vector<BrickBox> local_blocks;
   // A brick whose box keeps every cell is marched without a cell walk: the
   // walk would find no empty cell (dense 256^3 E-A, `vxr bench roofline`:
   // 0.87 against 1.29-1.33 ms of marching per million samples). A brick with
@@ -1276,8 +1362,13 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     const glm::dvec3 local_eye = (view.eye - origin) / ds;
     const bool near = glm::all(glm::lessThan(glm::abs(local_eye), glm::dvec3(kCellEyeLimit)));
     CellFacts facts;
-    const BrickBox local = march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts);
+    const BrickBox local =
+        march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts, &local_blocks);
     const bool walk = near && (reduce || !facts.all_kept);
+    if (cell_opacity && walk) {
+      blocks_[i] = glm::uvec2(block_world_.size(), block_world_.size() + local_blocks.size());
+      for (const BrickBox& b : local_blocks) block_world_.push_back({origin + b.lo * ds, origin + b.hi * ds});
+    }
     walks[i] = walk;
     fill_record(static_cast<uint8_t*>(table_.mapped) + table_base + i * sizeof(shader::BrickRecord), key,
                 glm::vec3(o), view, frame.lod, local, walk);
@@ -1302,7 +1393,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     if (mode == BrickPassMode::kMultipass) {
       VXR_ASSIGN_OR_RETURN(spans.waves, build_waves(march_world, view, ax, ay, dst, items_capacity, &items_n));
     } else if (mode == BrickPassMode::kTiled) {
-      VXR_RETURN_IF_ERROR(build_tile_lists(march_world, walks, view, ax, ay, dst, items_capacity, &items_n, &spans));
+      VXR_RETURN_IF_ERROR(build_tile_lists(march_world, walks, blocks_, block_world_, view, ax, ay, dst, items_capacity, &items_n, &spans));
     }
     return Status::ok();
   };
@@ -1359,7 +1450,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     classify.bits_bytes = bits_bytes;
     const double skipped = double(split) * pool_->cells().cell_size / s.step_voxels;
     walk = pool_->cells().cell_size < 4 && skipped > double(groups) ? CellWalk::kCells : CellWalk::kGroups;
-    if (opt_.cell_walk != BrickCellWalk::kAuto)
+    if (getenv("VXR_WALK")) walk = getenv("VXR_WALK")[0] == (char)99 ? CellWalk::kCells : CellWalk::kGroups;
+    else if (opt_.cell_walk != BrickCellWalk::kAuto)
       walk = opt_.cell_walk == BrickCellWalk::kCells ? CellWalk::kCells : CellWalk::kGroups;
   }
   VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),

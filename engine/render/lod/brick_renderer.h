@@ -194,6 +194,9 @@ class BrickRenderer final : public VolumeRenderer {
   // axis), march without empty-space cells: float positions there are too
   // coarse for the cells' band (record_view).
   static constexpr double kCellEyeLimit = 8192.0;
+  // A walked brick's kept cells go to the tile lists in blocks of this many
+  // cells a side (march_box), each with the view depths it spans.
+  static constexpr uint32_t kBlockCells = 4;
 
   static Result<std::unique_ptr<BrickRenderer>> create(gpu::Context& ctx, const ChunkSource& source,
                                                        const BrickRendererOptions& options = {});
@@ -336,8 +339,11 @@ class BrickRenderer final : public VolumeRenderer {
     uint32_t boxed_groups = 0;  // groups meeting the box of kept cells (what a walk may cross)
     bool all_kept = false;      // every cell in the box is kept: a walk would find no empty cell
   };
+  // `blocks` (with `cells`): the kept cells' boxes in blocks of
+  // kBlockCells^3 cells, each the tight box of the block's kept cells
+  // grown like the march box (local voxels, within it).
   BrickBox march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells,
-                     CellFacts* facts = nullptr);
+                     CellFacts* facts = nullptr, std::vector<BrickBox>* blocks = nullptr);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in
   // texels; `box`: march_box, local voxels; `walk`: its rays walk cells).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
@@ -396,7 +402,13 @@ class BrickRenderer final : public VolumeRenderer {
   // rectangle touches it; then the tiles with a brick that walks (`walks`,
   // per drawn brick), those with bricks that do not, and those without
   // any (their spans go into `spans`).
-  Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks, const LodView& view,
+  // `blocks`: per drawn brick, [first, end) of `block_boxes` (world boxes
+  // of its kept cells, march_box): a tile gets the brick only where one of
+  // them touches it, with the view depths they span there (its rays march
+  // only those); an empty span clips nothing.
+  Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
+                          const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
+                          const LodView& view,
                           const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used,
                           WorkSpans* spans);
   // A work list of at least `entries` (twice the old at least), the old one
@@ -426,6 +438,8 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<uint8_t> tile_kinds_;  // build_tile_lists' scratch: each tile's kind (WorkSpans)
   std::vector<BrickBox> march_world_;  // record_view's scratch: per drawn brick, the world box its rays march
   std::vector<uint8_t> walks_;         // record_view's scratch: per drawn brick, whether it walks its cells
+  std::vector<glm::uvec2> blocks_;     // record_view's scratch: per drawn brick, its span of block_world_
+  std::vector<BrickBox> block_world_;  // record_view's scratch: the walked bricks' blocks (march_box), world boxes
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   std::vector<gpu::Buffer> retired_buffers_;  // likewise (a work list that grew)
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
@@ -461,6 +475,7 @@ class BrickRenderer final : public VolumeRenderer {
     uint64_t settings = 0;  // 0: not computed
     glm::uvec3 lo{0}, hi{0};
     CellFacts facts;
+    std::vector<BrickBox> blocks;  // march_box's blocks, local voxels
   };
   std::vector<OccupiedCells> occupied_;
   std::vector<uint8_t> kept_scratch_;  // march_box: which cells a brick keeps
