@@ -121,15 +121,16 @@ bool is_unorm8(VkFormat f) {
 }
 
 std::string format_stats(const BrickFrameStats& s) {
-  char buf[320];
+  char buf[384];
   std::snprintf(buf, sizeof(buf),
                 "visited %llu drawn %llu (fallback %llu) empty %llu culled %llu missing %llu samples %llu "
-                "uploaded %u bricks %.2f MiB hit %.1f%% traverse %.2f ms render %.2f ms; cells walked in %u bricks",
+                "uploaded %u bricks %.2f MiB hit %.1f%% traverse %.2f ms render %.2f ms; cells walked in %u bricks; "
+                "tile entries %u from %u blocks",
                 (unsigned long long)s.lod.visited, (unsigned long long)s.lod.drawn,
                 (unsigned long long)s.lod.fallback, (unsigned long long)s.lod.skipped_empty,
                 (unsigned long long)s.lod.culled, (unsigned long long)s.lod.missing, (unsigned long long)s.samples,
                 s.bricks_uploaded, double(s.bytes_uploaded) / (1 << 20), 100.0 * s.hit_rate, s.traverse_ms,
-                s.render_ms, s.bricks_walked);
+                s.render_ms, s.bricks_walked, s.tile_entries, s.tile_blocks);
   return buf;
 }
 
@@ -1129,6 +1130,7 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
                                        const LodView& view, const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst,
                                        size_t capacity, size_t* used, WorkSpans* spans) {
   const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
+  spans->blocks = 0;
   struct Entry {
     uint32_t brick;
     glm::vec2 depth;  // view depths its rays march there
@@ -1143,11 +1145,15 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
     const glm::uvec4 r = warp_rect(screen.rect(boxes[b]), ax, ay);
     if (r.z == 0 || r.w == 0) continue;
     const glm::uvec2 t0 = glm::uvec2(r.x, r.y) / 8u, t1 = (glm::uvec2(r.x + r.z, r.y + r.w) - 1u) / 8u;
-    if (blocks[b].y == blocks[b].x) {
+    // A brick within one tile gains little from its blocks (its rays clip
+    // to its box), and past the view's budget they cost more CPU than they save.
+    const uint32_t n_blocks = blocks[b].y - blocks[b].x;
+    if (n_blocks == 0 || t0 == t1 || spans->blocks + n_blocks > kViewBlocks) {
       for (uint32_t y = t0.y; y <= t1.y; ++y)
         for (uint32_t x = t0.x; x <= t1.x; ++x) lists[size_t(y) * tw + x].push_back({b, all_depths});
       continue;
     }
+    spans->blocks += n_blocks;
     // Per tile of the brick's rectangle, the depths its blocks span there.
     const uint32_t rw = t1.x - t0.x + 1;
     depths.assign(size_t(rw) * (t1.y - t0.y + 1), glm::dvec2(1e300, -1e300));
@@ -1173,6 +1179,7 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
       }
   }
   for (const auto& l : lists) total += l.size();
+  spans->tile_entries = static_cast<uint32_t>(total - lists.size());
   total += lists.size();  // each tile once more, among those with bricks or those without
   if (total > capacity) {
     *used = total;  // record_view grows the list to this and builds again
@@ -1363,9 +1370,10 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     const bool near = glm::all(glm::lessThan(glm::abs(local_eye), glm::dvec3(kCellEyeLimit)));
     CellFacts facts;
     const BrickBox local =
-        march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts, &local_blocks);
+        march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts,
+                  opt_.tile_depths ? &local_blocks : nullptr);
     const bool walk = near && (reduce || !facts.all_kept);
-    if (cell_opacity && walk) {
+    if (cell_opacity && walk && opt_.tile_depths) {
       blocks_[i] = glm::uvec2(block_world_.size(), block_world_.size() + local_blocks.size());
       for (const BrickBox& b : local_blocks) block_world_.push_back({origin + b.lo * ds, origin + b.hi * ds});
     }
@@ -1393,7 +1401,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     if (mode == BrickPassMode::kMultipass) {
       VXR_ASSIGN_OR_RETURN(spans.waves, build_waves(march_world, view, ax, ay, dst, items_capacity, &items_n));
     } else if (mode == BrickPassMode::kTiled) {
-      VXR_RETURN_IF_ERROR(build_tile_lists(march_world, walks, blocks_, block_world_, view, ax, ay, dst, items_capacity, &items_n, &spans));
+      VXR_RETURN_IF_ERROR(build_tile_lists(march_world, walks, blocks_, block_world_, view, ax, ay, dst,
+                                           items_capacity, &items_n, &spans));
     }
     return Status::ok();
   };
@@ -1404,6 +1413,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     built = build_work();
   }
   VXR_RETURN_IF_ERROR(built);
+  st.tile_entries = spans.tile_entries;
+  st.tile_blocks = spans.blocks;
   const VkDeviceSize items_bytes = std::max<size_t>(items_n, 1) * sizeof(glm::uvec4);
   if (items_base + items_bytes > items_.size) return out_of_range("render: the frame's work list is full");
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;
@@ -1450,8 +1461,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     classify.bits_bytes = bits_bytes;
     const double skipped = double(split) * pool_->cells().cell_size / s.step_voxels;
     walk = pool_->cells().cell_size < 4 && skipped > double(groups) ? CellWalk::kCells : CellWalk::kGroups;
-    if (getenv("VXR_WALK")) walk = getenv("VXR_WALK")[0] == (char)99 ? CellWalk::kCells : CellWalk::kGroups;
-    else if (opt_.cell_walk != BrickCellWalk::kAuto)
+    if (opt_.cell_walk != BrickCellWalk::kAuto)
       walk = opt_.cell_walk == BrickCellWalk::kCells ? CellWalk::kCells : CellWalk::kGroups;
   }
   VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),

@@ -115,6 +115,11 @@ struct BrickRendererOptions {
   // buffer where the device holds them all, else from the storage buffer.
   // False: always the storage buffer.
   bool texel_cell_keys = true;
+  // Tiled frames: each tile's entry for a walked brick carries the view
+  // depths its kept cells' blocks span there, and a tile no block touches
+  // drops the brick (build_tile_lists). False: every brick on every tile of
+  // its screen rectangle, marched over its whole box (tests pin the image).
+  bool tile_depths = true;
   BrickCellWalk cell_walk = BrickCellWalk::kAuto;
   // Shared with other renderers on the same context (they must outlive none
   // of its frames); null: this renderer's own.
@@ -197,6 +202,9 @@ class BrickRenderer final : public VolumeRenderer {
   // A walked brick's kept cells go to the tile lists in blocks of this many
   // cells a side (march_box), each with the view depths it spans.
   static constexpr uint32_t kBlockCells = 4;
+  // The most blocks one view projects (each costs a screen rectangle and its
+  // tiles on the CPU); bricks past it march their whole box.
+  static constexpr uint32_t kViewBlocks = 8192;
 
   static Result<std::unique_ptr<BrickRenderer>> create(gpu::Context& ctx, const ChunkSource& source,
                                                        const BrickRendererOptions& options = {});
@@ -382,6 +390,7 @@ class BrickRenderer final : public VolumeRenderer {
   struct WorkSpans {
     std::vector<glm::uvec2> waves;
     glm::uvec2 marched_tiles{0, 0}, plain_tiles{0, 0}, empty_tiles{0, 0};
+    uint32_t tile_entries = 0, blocks = 0;  // build_tile_lists: bricks on tiles, blocks projected
   };
   // `model`: the packed parameters' VXR_MODEL_* (control.x). `records`:
   // where the view's brick records start in table_ (bytes, a multiple of
