@@ -414,12 +414,12 @@ class BrickRenderer final : public VolumeRenderer {
   // `blocks`: per drawn brick, [first, end) of `block_boxes` (world boxes
   // of its kept cells, march_box): a tile gets the brick only where one of
   // them touches it, with the view depths they span there (its rays march
-  // only those); an empty span clips nothing.
+  // only those); an empty span, a brick within one tile and bricks past
+  // kViewBlocks clip nothing.
   Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                           const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
-                          const LodView& view,
-                          const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst, size_t capacity, size_t* used,
-                          WorkSpans* spans);
+                          const LodView& view, const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst,
+                          size_t capacity, size_t* used, WorkSpans* spans);
   // A work list of at least `entries` (twice the old at least), the old one
   // kept until the next begin_frame: the frame's earlier views still read it.
   Status grow_work_list(size_t entries);
