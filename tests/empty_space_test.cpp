@@ -498,6 +498,10 @@ TEST_CASE("empty-space cells: tile lists clipped to the depths of each brick's k
   plain.tile_depths = false;
   auto clipped = small_pool_renderer(*src);
   auto whole = small_pool_renderer(*src, plain);
+  constexpr uint32_t kFewBlocks = 40;
+  BrickRendererOptions few_blocks;
+  few_blocks.max_tile_blocks = kFewBlocks;
+  auto budgeted = small_pool_renderer(*src, few_blocks);
   struct View {
     const char* what;
     Camera cam;
@@ -520,19 +524,27 @@ TEST_CASE("empty-space cells: tile lists clipped to the depths of each brick's k
       f.lod.roi = v.roi;
       f.lod.cut = v.cut;
       f.mode = BrickPassMode::kTiled;
-      BrickFrameStats on, off;
+      BrickFrameStats on, off, few;
       const ImageRgba8 a = converge(*clipped, v.cam, s, f, 97, 97, &on);
       const ImageRgba8 b = converge(*whole, v.cam, s, f, 97, 97, &off);
+      // Past a view's block budget the bricks march their whole box: still the same image.
+      const ImageRgba8 c = converge(*budgeted, v.cam, s, f, 97, 97, &few);
       const std::string what = std::string(v.what) + " " + optical_model_name(model) + ": tile entries " +
                                std::to_string(on.tile_entries) + " (" + std::to_string(on.tile_blocks) +
                                " blocks) vs " + std::to_string(off.tile_entries) + ", samples " +
-                               std::to_string(on.samples) + " vs " + std::to_string(off.samples);
+                               std::to_string(on.samples) + " vs " + std::to_string(off.samples) +
+                               "; budget of " + std::to_string(kFewBlocks) + ": " +
+                               std::to_string(few.tile_entries) + " from " + std::to_string(few.tile_blocks);
       INFO(what);
       CHECK(test::looks_non_blank(a));
       CHECK(a.pixels == b.pixels);
       CHECK(on.tile_blocks > 0);
       CHECK(off.tile_blocks == 0);
       CHECK(on.tile_entries < off.tile_entries);
+      CHECK(c.pixels == b.pixels);
+      CHECK(few.tile_blocks > 0);
+      CHECK(few.tile_blocks <= kFewBlocks);
+      CHECK(few.tile_entries >= on.tile_entries);
       // (Samples are not compared: a walk that starts at the clipped depth
       // can end its runs a few samples elsewhere, and MIP's runs then take a
       // handful more; the image must not change.)

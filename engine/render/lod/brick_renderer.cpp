@@ -1148,7 +1148,7 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
     // A brick within one tile gains little from its blocks (its rays clip
     // to its box), and past the view's budget they cost more CPU than they save.
     const uint32_t n_blocks = blocks[b].y - blocks[b].x;
-    if (n_blocks == 0 || t0 == t1 || spans->blocks + n_blocks > kViewBlocks) {
+    if (n_blocks == 0 || t0 == t1 || spans->blocks + n_blocks > opt_.max_tile_blocks) {
       for (uint32_t y = t0.y; y <= t1.y; ++y)
         for (uint32_t x = t0.x; x <= t1.x; ++x) lists[size_t(y) * tw + x].push_back({b, all_depths});
       continue;

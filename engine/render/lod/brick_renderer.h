@@ -120,6 +120,10 @@ struct BrickRendererOptions {
   // drops the brick (build_tile_lists). False: every brick on every tile of
   // its screen rectangle, marched over its whole box (tests pin the image).
   bool tile_depths = true;
+  // The most blocks one view projects for them (each costs a screen
+  // rectangle and its tiles on the CPU, about 250 ns on lavapipe's 2-core
+  // host: 2 ms a view); bricks past it march their whole box.
+  uint32_t max_tile_blocks = 8192;
   BrickCellWalk cell_walk = BrickCellWalk::kAuto;
   // Shared with other renderers on the same context (they must outlive none
   // of its frames); null: this renderer's own.
@@ -202,9 +206,6 @@ class BrickRenderer final : public VolumeRenderer {
   // A walked brick's kept cells go to the tile lists in blocks of this many
   // cells a side (march_box), each with the view depths it spans.
   static constexpr uint32_t kBlockCells = 4;
-  // The most blocks one view projects (each costs a screen rectangle and its
-  // tiles on the CPU); bricks past it march their whole box.
-  static constexpr uint32_t kViewBlocks = 8192;
 
   static Result<std::unique_ptr<BrickRenderer>> create(gpu::Context& ctx, const ChunkSource& source,
                                                        const BrickRendererOptions& options = {});
@@ -415,7 +416,7 @@ class BrickRenderer final : public VolumeRenderer {
   // of its kept cells, march_box): a tile gets the brick only where one of
   // them touches it, with the view depths they span there (its rays march
   // only those); an empty span, a brick within one tile and bricks past
-  // kViewBlocks clip nothing.
+  // max_tile_blocks clip nothing.
   Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                           const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
                           const LodView& view, const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst,
