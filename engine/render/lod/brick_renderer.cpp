@@ -659,7 +659,7 @@ bool is_empty(const BrickBox& b) { return !(b.lo.x < b.hi.x && b.lo.y < b.hi.y &
 }  // namespace
 
 BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells,
-                                  CellFacts* facts, std::vector<BrickBox>* blocks) {
+                                  CellFacts* facts, const std::vector<BrickBox>** blocks) {
   const BrickBox box = chunk_box(src_, key);
   const auto& ds_u = src_.levels()[key.level].downsample;
   const glm::dvec3 ds(ds_u[0], ds_u[1], ds_u[2]);
@@ -668,6 +668,7 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
     m.lo = glm::max(m.lo, (clip.roi.lo - box.lo) / ds);
     m.hi = glm::min(m.hi, (clip.roi.hi - box.lo) / ds);
   }
+  if (blocks) *blocks = nullptr;
   if (!cells) return m;
   // Samples outside the kept cells lie in cells whose ranges cover every
   // voxel they filter: zero opacity, nothing to add. The box of the kept
@@ -676,6 +677,8 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
   const uint32_t slot = pool_->slot_of(key);
   if (occupied_.size() != pool_->capacity()) occupied_.assign(pool_->capacity(), {});
   OccupiedCells& oc = occupied_[slot];
+  // Cell k of an axis covers [k * s - 0.5, (k + 1) * s - 0.5) (shared/brick_params.h).
+  const double s = pool_->cells().cell_size, grow = 0.5 * VXR_CELL_BAND;
   if (oc.settings != cells->hash() || !(oc.key == key)) {
     const uint32_t n = pool_->cells().cells_per_axis, count = pool_->cells().count();
     const auto* ranges = static_cast<const glm::vec2*>(pool_->cell_ranges().mapped);
@@ -715,8 +718,9 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
     const bool any = glm::all(glm::lessThan(lo, hi));
     const uint32_t boxed = any ? (ghi.x - glo.x) * (ghi.y - glo.y) * (ghi.z - glo.z) : 0;
     const bool all_kept = any && kept_count == (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
-    oc = {key, cells->hash(), lo, hi, {split, boxed, all_kept}, {}};
-    // Blocks of kBlockCells^3 cells: the tight box of each one's kept cells.
+    oc.key = key, oc.settings = cells->hash(), oc.lo = lo, oc.hi = hi, oc.facts = {split, boxed, all_kept};
+    oc.blocks.clear();  // (keeps its capacity: settings changes recompute every drawn brick)
+    // Blocks of kBlockCells^3 cells: the tight box of each one's kept cells, grown as the march box.
     const uint32_t bc = kBlockCells, nb = (n + bc - 1) / bc;
     for (uint32_t bz = 0; bz < nb; ++bz)
       for (uint32_t by = 0; by < nb; ++by)
@@ -729,22 +733,14 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
                   blo = glm::min(blo, glm::uvec3(x, y, z));
                   bhi = glm::max(bhi, glm::uvec3(x, y, z) + 1u);
                 }
-          if (glm::all(glm::lessThan(blo, bhi))) oc.blocks.push_back({glm::dvec3(blo), glm::dvec3(bhi)});
+          if (glm::all(glm::lessThan(blo, bhi)))
+            oc.blocks.push_back({glm::dvec3(blo) * s - 0.5 - grow, glm::dvec3(bhi) * s - 0.5 + grow});
         }
   }
   if (facts) *facts = oc.facts;
-  // Cell k of an axis covers [k * s - 0.5, (k + 1) * s - 0.5) (shared/brick_params.h).
-  const double s = pool_->cells().cell_size, grow = 0.5 * VXR_CELL_BAND;
-  const BrickBox whole = m;
+  if (blocks) *blocks = &oc.blocks;
   m.lo = glm::max(m.lo, glm::dvec3(oc.lo) * s - 0.5 - grow);
   m.hi = glm::min(m.hi, glm::dvec3(oc.hi) * s - 0.5 + grow);
-  if (blocks) {
-    blocks->clear();
-    for (const BrickBox& b : oc.blocks) {
-      BrickBox v{glm::max(whole.lo, b.lo * s - 0.5 - grow), glm::min(whole.hi, b.hi * s - 0.5 + grow)};
-      if (!is_empty(v)) blocks->push_back(v);
-    }
-  }
   return m;
 }
 
@@ -1348,7 +1344,6 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   walks.resize(lod.draw.size());
   blocks_.assign(lod.draw.size(), glm::uvec2(0));
   block_world_.clear();
-  std::vector<BrickBox> local_blocks;
   // A brick whose box keeps every cell is marched without a cell walk: the
   // walk would find no empty cell (dense 256^3 E-A, `vxr bench roofline`:
   // 0.87 against 1.29-1.33 ms of marching per million samples). A brick with
@@ -1369,13 +1364,17 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     const glm::dvec3 local_eye = (view.eye - origin) / ds;
     const bool near = glm::all(glm::lessThan(glm::abs(local_eye), glm::dvec3(kCellEyeLimit)));
     CellFacts facts;
-    const BrickBox local =
-        march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts,
-                  opt_.tile_depths ? &local_blocks : nullptr);
+    const std::vector<BrickBox>* kept_blocks = nullptr;  // march_box's cache: valid until its next call
+    const BrickBox local = march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts,
+                                     opt_.tile_depths ? &kept_blocks : nullptr);
     const bool walk = near && (reduce || !facts.all_kept);
-    if (cell_opacity && walk && opt_.tile_depths) {
-      blocks_[i] = glm::uvec2(block_world_.size(), block_world_.size() + local_blocks.size());
-      for (const BrickBox& b : local_blocks) block_world_.push_back({origin + b.lo * ds, origin + b.hi * ds});
+    if (kept_blocks && walk) {
+      blocks_[i].x = static_cast<uint32_t>(block_world_.size());
+      for (const BrickBox& b : *kept_blocks) {
+        const BrickBox v{glm::max(local.lo, b.lo), glm::min(local.hi, b.hi)};  // within the march box (ROI)
+        if (!is_empty(v)) block_world_.push_back({origin + v.lo * ds, origin + v.hi * ds});
+      }
+      blocks_[i].y = static_cast<uint32_t>(block_world_.size());
     }
     walks[i] = walk;
     fill_record(static_cast<uint8_t*>(table_.mapped) + table_base + i * sizeof(shader::BrickRecord), key,

@@ -348,11 +348,12 @@ class BrickRenderer final : public VolumeRenderer {
     uint32_t boxed_groups = 0;  // groups meeting the box of kept cells (what a walk may cross)
     bool all_kept = false;      // every cell in the box is kept: a walk would find no empty cell
   };
-  // `blocks` (with `cells`): the kept cells' boxes in blocks of
+  // `blocks` (with `cells`; else null): the kept cells' boxes in blocks of
   // kBlockCells^3 cells, each the tight box of the block's kept cells
-  // grown like the march box (local voxels, within it).
+  // grown like the march box (local voxels, not clipped to the ROI), cached
+  // per slot and valid until the next call.
   BrickBox march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells,
-                     CellFacts* facts = nullptr, std::vector<BrickBox>* blocks = nullptr);
+                     CellFacts* facts = nullptr, const std::vector<BrickBox>** blocks = nullptr);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in
   // texels; `box`: march_box, local voxels; `walk`: its rays walk cells).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
@@ -485,7 +486,7 @@ class BrickRenderer final : public VolumeRenderer {
     uint64_t settings = 0;  // 0: not computed
     glm::uvec3 lo{0}, hi{0};
     CellFacts facts;
-    std::vector<BrickBox> blocks;  // march_box's blocks, local voxels
+    std::vector<BrickBox> blocks;  // march_box's blocks, local voxels, grown by the band
   };
   std::vector<OccupiedCells> occupied_;
   std::vector<uint8_t> kept_scratch_;  // march_box: which cells a brick keeps
