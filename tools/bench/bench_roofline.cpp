@@ -87,31 +87,20 @@ Result<SceneTimes> measure(gpu::Context& ctx, SamplingCeiling& ceiling, const Sc
   std::vector<SampleWork> works = {SampleWork::kShade};
   if (sc.settings.model == OpticalModel::kEmissionAbsorption)
     works.insert(works.end(), {SampleWork::kFetchOnly, SampleWork::kMarchOnly});
-  std::vector<TimedFrames> t(works.size());
-  std::vector<std::vector<double>> gpu(works.size()), wall(works.size());
-  std::vector<double> ceiling_ms;
-  BrickFrameSettings f;
-  f.lod.force_level = 0;
-  for (size_t w = 0; w < works.size(); ++w) {  // converges, and builds each pipeline
-    f.sample_work = works[w];
-    VXR_ASSIGN_OR_RETURN(t[w], time_converged(*r, cam, sc.settings, f, size, 1));
-  }
-  for (int i = 0; i < repeats; ++i) {
-    for (size_t w = 0; w < works.size(); ++w) {
-      f.sample_work = works[w];
-      const auto t0 = std::chrono::steady_clock::now();
-      VXR_RETURN_IF_ERROR(r->render_into(t[w].image, cam, sc.settings, f, size, size, &t[w].stats));
-      wall[w].push_back(ms_since(t0));
-      gpu[w].push_back(t[w].stats.gpu_ms);
-    }
-    VXR_ASSIGN_OR_RETURN(double ms, ceiling.time_ms());
-    ceiling_ms.push_back(ms);
-  }
+  std::vector<BrickFrameSettings> frames(works.size());
   for (size_t w = 0; w < works.size(); ++w) {
-    t[w].gpu_ms = median(gpu[w]);
-    t[w].wall_ms = median(wall[w]);
-    if (t[w].gpu_ms <= 0.0) return unsupported("bench roofline: the device has no timestamps");
+    frames[w].lod.force_level = 0;
+    frames[w].sample_work = works[w];
   }
+  std::vector<double> ceiling_ms;
+  VXR_ASSIGN_OR_RETURN(std::vector<TimedFrames> t,
+                       time_in_turn(*r, cam, sc.settings, frames, size, repeats, [&]() -> Status {
+                         VXR_ASSIGN_OR_RETURN(double ms, ceiling.time_ms());
+                         ceiling_ms.push_back(ms);
+                         return Status::ok();
+                       }));
+  for (const TimedFrames& f : t)
+    if (f.gpu_ms <= 0.0) return unsupported("bench roofline: the device has no timestamps");
   SceneTimes out{t[0], std::nullopt, std::nullopt, SamplingCeiling::samples() / (median(ceiling_ms) * 1e-3)};
   if (works.size() == 3) out.fetch_only = t[1], out.march_only = t[2];
   return out;

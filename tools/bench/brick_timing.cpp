@@ -1,5 +1,7 @@
 #include "bench/brick_timing.h"
 
+#include <chrono>
+
 #include "bench.h"
 
 namespace vxr::bench {
@@ -16,24 +18,37 @@ RenderSettings vtk_ramp(OpticalModel model, double lo, double hi) {
 
 Result<TimedFrames> time_converged(BrickRenderer& r, const Camera& cam, const RenderSettings& s,
                                    const BrickFrameSettings& f, uint32_t size, int repeats) {
-  TimedFrames t;
-  for (int i = 0;; ++i) {
-    VXR_ASSIGN_OR_RETURN(t.image, r.render(cam, s, f, size, size, &t.stats));
-    if (t.stats.lod.missing == 0) break;
-    if (i > 200) return internal_error("bench: the view did not converge in 200 frames");
+  VXR_ASSIGN_OR_RETURN(std::vector<TimedFrames> t, time_in_turn(r, cam, s, {f}, size, repeats));
+  return std::move(t[0]);
+}
+
+Result<std::vector<TimedFrames>> time_in_turn(BrickRenderer& r, const Camera& cam, const RenderSettings& s,
+                                              const std::vector<BrickFrameSettings>& frames, uint32_t size,
+                                              int repeats, const std::function<Status()>& after_round) {
+  std::vector<TimedFrames> t(frames.size());
+  for (size_t k = 0; k < frames.size(); ++k) {
+    for (int i = 0;; ++i) {
+      VXR_ASSIGN_OR_RETURN(t[k].image, r.render(cam, s, frames[k], size, size, &t[k].stats));
+      if (t[k].stats.lod.missing == 0) break;
+      if (i > 200) return internal_error("bench: the view did not converge in 200 frames");
+    }
+    // A warm-up with every brick resident: pipelines and classified cells in place.
+    VXR_RETURN_IF_ERROR(r.render_into(t[k].image, cam, s, frames[k], size, size, &t[k].stats));
   }
-  std::vector<double> gpu;
-  Status err;
-  t.wall_ms = median_ms(
-      repeats,
-      [&] {
-        VXR_RETURN_IF_ERROR(r.render_into(t.image, cam, s, f, size, size, &t.stats));
-        gpu.push_back(t.stats.gpu_ms);
-        return Status::ok();
-      },
-      &err);
-  if (!err.is_ok()) return err;
-  t.gpu_ms = median(gpu);
+  std::vector<std::vector<double>> wall(frames.size()), gpu(frames.size());
+  for (int i = 0; i < repeats; ++i) {
+    for (size_t k = 0; k < frames.size(); ++k) {
+      const auto t0 = std::chrono::steady_clock::now();
+      VXR_RETURN_IF_ERROR(r.render_into(t[k].image, cam, s, frames[k], size, size, &t[k].stats));
+      wall[k].push_back(ms_since(t0));
+      gpu[k].push_back(t[k].stats.gpu_ms);
+    }
+    if (after_round) VXR_RETURN_IF_ERROR(after_round());
+  }
+  for (size_t k = 0; k < frames.size(); ++k) {
+    t[k].wall_ms = median(wall[k]);
+    t[k].gpu_ms = median(gpu[k]);
+  }
   return t;
 }
 
