@@ -121,16 +121,16 @@ bool is_unorm8(VkFormat f) {
 }
 
 std::string format_stats(const BrickFrameStats& s) {
-  char buf[384];
+  char buf[512];
   std::snprintf(buf, sizeof(buf),
                 "visited %llu drawn %llu (fallback %llu) empty %llu culled %llu missing %llu samples %llu "
                 "uploaded %u bricks %.2f MiB hit %.1f%% traverse %.2f ms render %.2f ms; cells walked in %u bricks; "
-                "tile entries %u from %u blocks",
+                "tile entries %u from %u blocks, tiles without walks %u, without bricks %u",
                 (unsigned long long)s.lod.visited, (unsigned long long)s.lod.drawn,
                 (unsigned long long)s.lod.fallback, (unsigned long long)s.lod.skipped_empty,
                 (unsigned long long)s.lod.culled, (unsigned long long)s.lod.missing, (unsigned long long)s.samples,
                 s.bricks_uploaded, double(s.bytes_uploaded) / (1 << 20), 100.0 * s.hit_rate, s.traverse_ms,
-                s.render_ms, s.bricks_walked, s.tile_entries, s.tile_blocks);
+                s.render_ms, s.bricks_walked, s.tile_entries, s.tile_blocks, s.tiles_plain, s.tiles_empty);
   return buf;
 }
 
@@ -1027,6 +1027,70 @@ class ScreenBoxes {
   glm::dmat3 inv_;
 };
 
+// The rays of each 8x8 tile of a view as one centre ray and the NDC
+// half-extents of the tile's pixel centres. A point that some ray of the
+// tile reaches at view depth d lies within d (hx |right_i| + hy |up_i|) of
+// the centre ray's point at that depth on every world axis i, so the depths
+// where the tile's rays can meet a box are those where the centre ray meets
+// the box grown by that much (taken at the box's farthest depth): a chord,
+// much tighter than the depths of the box's corners when the box is oblique.
+class TileFrusta {
+ public:
+  TileFrusta(const LodView& v, const WarpAxis& ax, const WarpAxis& ay) : eye_(v.eye), columns_((ax.warped() + 7) / 8) {
+    const std::vector<glm::dvec2> x = ndc_spans(ax), y = ndc_spans(ay);
+    tiles_.resize(x.size() * y.size());
+    for (size_t ty = 0; ty < y.size(); ++ty)
+      for (size_t tx = 0; tx < x.size(); ++tx) {
+        // The centre ray per unit view depth (the shader's raw_dir); an axis
+        // it does not move along gets a huge inverse, never 0 * inf.
+        glm::dvec3 dir = v.forward + x[tx].x * v.right - y[ty].x * v.up;
+        dir = glm::mix(dir, glm::dvec3(1e-300), glm::equal(dir, glm::dvec3(0.0)));
+        tiles_[ty * x.size() + tx] = {1.0 / dir, x[tx].y * glm::abs(v.right) + y[ty].y * glm::abs(v.up)};
+      }
+  }
+
+  // A box whose corners span view depths `span`, made ready for depths():
+  // grown past float rounding of the rays, relative to the eye.
+  struct Box {
+    glm::dvec3 lo, hi;
+    glm::dvec2 span;
+  };
+  Box prepare(const BrickBox& box, glm::dvec2 span) const {
+    const glm::dvec3 margin = 1e-4 * (box.hi - box.lo) + 1e-6 * (glm::abs(eye_) + 1.0);
+    return {box.lo - margin - eye_, box.hi + margin - eye_, glm::dvec2(std::max(span.x, 0.0), span.y)};
+  }
+
+  // The view depths where tile (tx, ty)'s rays can meet the box, within
+  // its corners' depths; empty (x > y) where none does.
+  glm::dvec2 depths(uint32_t tx, uint32_t ty, const Box& box) const {
+    const Tile& t = tiles_[size_t(ty) * columns_ + tx];
+    const glm::dvec3 grow = std::max(box.span.y, 0.0) * t.spread;  // for the tile's other rays, at the farthest depth
+    const glm::dvec3 a = (box.lo - grow) * t.inv_dir, b = (box.hi + grow) * t.inv_dir;
+    const glm::dvec3 near = glm::min(a, b), far = glm::max(a, b);
+    return {std::max({box.span.x, near.x, near.y, near.z}), std::min({box.span.y, far.x, far.y, far.z})};
+  }
+
+ private:
+  struct Tile {
+    glm::dvec3 inv_dir;  // 1 / the centre ray per unit view depth
+    glm::dvec3 spread;   // per unit view depth, how far the tile's rays stray from it per world axis
+  };
+  // Per tile along an axis: the centre and half-extent in NDC of its pixel centres.
+  static std::vector<glm::dvec2> ndc_spans(const WarpAxis& a) {
+    const uint32_t n = a.warped();
+    std::vector<glm::dvec2> out((n + 7) / 8);
+    auto ndc = [&](uint32_t px) { return a.from_warped(px + 0.5) / a.full * 2.0 - 1.0; };  // monotonic in px
+    for (uint32_t t = 0; t < out.size(); ++t) {
+      const double first = ndc(t * 8), last = ndc(std::min(t * 8 + 7, n - 1));
+      out[t] = glm::dvec2(0.5 * (first + last), 0.5 * (last - first) + 1e-5);
+    }
+    return out;
+  }
+  glm::dvec3 eye_;
+  size_t columns_;
+  std::vector<Tile> tiles_;
+};
+
 // The warped-grid pixels covering full-image rectangle r (identity without a warp).
 glm::uvec4 warp_rect(const glm::uvec4& r, const WarpAxis& ax, const WarpAxis& ay) {
   const uint32_t x0 = uint32_t(std::floor(ax.to_warped(r.x))), y0 = uint32_t(std::floor(ay.to_warped(r.y)));
@@ -1127,13 +1191,13 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
                                        size_t capacity, size_t* used, WorkSpans* spans) {
   const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
   spans->blocks = 0;
-  struct Entry {
-    uint32_t brick;
-    glm::vec2 depth;  // view depths its rays march there
-  };
-  std::vector<std::vector<Entry>> lists(size_t(tw) * th);
-  std::vector<glm::dvec2> depths;
+  // Scratch kept between views: no allocation per view once sizes settle.
+  std::vector<std::vector<TileEntry>>& lists = tile_entries_;
+  lists.resize(size_t(tw) * th);
+  for (auto& l : lists) l.clear();
+  std::vector<glm::dvec2>& depths = tile_depths_;
   const ScreenBoxes screen(view);
+  const TileFrusta frusta(view, ax, ay);
   size_t total = lists.size();
   const glm::vec2 all_depths(0.0f, std::numeric_limits<float>::infinity());
   for (uint32_t b = 0; b < boxes.size(); ++b) {
@@ -1159,10 +1223,13 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
       if (q.z == 0 || q.w == 0) continue;
       const glm::uvec2 q0 = glm::max(glm::uvec2(q.x, q.y) / 8u, t0);
       const glm::uvec2 q1 = glm::min((glm::uvec2(q.x + q.z, q.y + q.w) - 1u) / 8u, t1);
+      const TileFrusta::Box block = frusta.prepare(block_boxes[i], d);
       for (uint32_t y = q0.y; y <= q1.y; ++y)
         for (uint32_t x = q0.x; x <= q1.x; ++x) {
+          const glm::dvec2 c = frusta.depths(x, y, block);
+          if (!(c.x <= c.y)) continue;  // the tile's rays pass the block by
           glm::dvec2& e = depths[size_t(y - t0.y) * rw + (x - t0.x)];
-          e = glm::dvec2(std::min(e.x, d.x), std::max(e.y, d.y));
+          e = glm::dvec2(std::min(e.x, c.x), std::max(e.y, c.y));
         }
     }
     for (uint32_t y = t0.y; y <= t1.y; ++y)
@@ -1189,7 +1256,7 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
   uint32_t next = static_cast<uint32_t>(lists.size());
   for (size_t t = 0; t < lists.size(); ++t) {
     dst[t] = glm::uvec4(next, uint32_t(lists[t].size()), 0, 0);
-    for (const Entry& e : lists[t]) {
+    for (const TileEntry& e : lists[t]) {
       dst[next++] = glm::uvec4(e.brick, glm::floatBitsToUint(e.depth.x), glm::floatBitsToUint(e.depth.y), 0);
       tile_kinds_[t] = walks[e.brick] ? uint8_t(kMarched) : std::min<uint8_t>(tile_kinds_[t], kPlain);
     }
@@ -1414,6 +1481,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   VXR_RETURN_IF_ERROR(built);
   st.tile_entries = spans.tile_entries;
   st.tile_blocks = spans.blocks;
+  st.tiles_plain = spans.plain_tiles.y;
+  st.tiles_empty = spans.empty_tiles.y;
   const VkDeviceSize items_bytes = std::max<size_t>(items_n, 1) * sizeof(glm::uvec4);
   if (items_base + items_bytes > items_.size) return out_of_range("render: the frame's work list is full");
   const uint64_t wanted = lod.stats.drawn - lod.stats.fallback + lod.stats.missing;

@@ -447,6 +447,12 @@ class BrickRenderer final : public VolumeRenderer {
   gpu::Handle<VkBufferView> no_texels_;
   std::vector<uint32_t> tile_rows_;  // build_tile_lists: the tile rows in dispatch order, kept while the height stays
   std::vector<uint8_t> tile_kinds_;  // build_tile_lists' scratch: each tile's kind (WorkSpans)
+  struct TileEntry {
+    uint32_t brick;
+    glm::vec2 depth;  // view depths its rays march there
+  };
+  std::vector<std::vector<TileEntry>> tile_entries_;  // build_tile_lists' scratch: per tile, kept between views
+  std::vector<glm::dvec2> tile_depths_;               // build_tile_lists' scratch: a brick's depths per tile
   std::vector<BrickBox> march_world_;  // record_view's scratch: per drawn brick, the world box its rays march
   std::vector<uint8_t> walks_;         // record_view's scratch: per drawn brick, whether it walks its cells
   std::vector<glm::uvec2> blocks_;     // record_view's scratch: per drawn brick, its span of block_world_
