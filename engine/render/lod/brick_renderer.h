@@ -414,10 +414,10 @@ class BrickRenderer final : public VolumeRenderer {
   // per drawn brick), those with bricks that do not, and those without
   // any (their spans go into `spans`).
   // `blocks`: per drawn brick, [first, end) of `block_boxes` (world boxes
-  // of its kept cells, march_box): a tile gets the brick only where one of
-  // them touches it, with the view depths they span there (its rays march
-  // only those); an empty span, a brick within one tile and bricks past
-  // max_tile_blocks clip nothing.
+  // of its kept cells, march_box): a tile gets the brick only where its
+  // rays can meet one of them, with the view depths where they can
+  // (TileFrusta; its rays march only those); an empty span, a brick within
+  // one tile and bricks past max_tile_blocks clip nothing.
   Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                           const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
                           const LodView& view, const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst,
