@@ -598,7 +598,7 @@ void main() {
     const BrickRecord br = brick_record(b);
     if (!item_mode && !segment(br, dir, t0, t1)) continue;
     if (tile_lists) {
-      // The view depths the brick's kept cells span in this tile (build_tile_lists).
+      // The view depths where this tile's rays can meet the brick's kept cells (build_tile_lists).
       t0 = max(t0, uintBitsToFloat(entry.y) * ray_len);
       t1 = min(t1, uintBitsToFloat(entry.z) * ray_len);
       if (!(t1 > t0)) continue;

@@ -487,9 +487,9 @@ TEST_CASE("empty-space cells: the cell walk keeps the image for rays along the a
 }
 
 TEST_CASE("empty-space cells: tile lists clipped to the depths of each brick's kept blocks keep the image") {
-  // The tiled lists carry, per tile, the view depths a walked brick's blocks
-  // of kept cells span there, and leave the brick off tiles none touches
-  // (build_tile_lists). Against the same renderer without them: the same
+  // The tiled lists carry, per tile, the view depths where its rays can
+  // meet a walked brick's blocks of kept cells, and leave the brick off
+  // tiles whose rays meet none (build_tile_lists). Against the same renderer without them: the same
   // bytes, from fewer tile entries, for views from outside, along an axis,
   // from inside (blocks reaching behind the eye), with an ROI and a cut.
   test::GpuTestScope scope;

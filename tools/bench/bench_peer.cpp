@@ -7,8 +7,9 @@
 // 10% occupied) with emission-absorption; every one drawn at full resolution
 // (LOD level 0) by the brick renderer. Per step: the median frame wall time
 // and GPU time (timestamps) with skipping on (bricks and cells) and off,
-// drawn in turn frame by frame (a busy machine slows both alike); whether the two images are byte-identical; RMSE (8-bit units,
-// RGBA over black) against the CPU reference of the same scene. Per scene the
+// drawn in turn frame by frame (a busy machine slows both alike); whether
+// the two images are byte-identical; RMSE (8-bit units, RGBA over black)
+// against the CPU reference of the same scene. Per scene the
 // report names the coarsest step whose RMSE <= 1.5 and the on/off speedup there.
 // Opacity is per world unit (unit distance 1, VTK's default scalar opacity
 // unit distance), so the MRI's 5x thicker z voxels absorb 5x along z as in

@@ -16,12 +16,6 @@ RenderSettings vtk_ramp(OpticalModel model, double lo, double hi) {
   return s;
 }
 
-Result<TimedFrames> time_converged(BrickRenderer& r, const Camera& cam, const RenderSettings& s,
-                                   const BrickFrameSettings& f, uint32_t size, int repeats) {
-  VXR_ASSIGN_OR_RETURN(std::vector<TimedFrames> t, time_in_turn(r, cam, s, {f}, size, repeats));
-  return std::move(t[0]);
-}
-
 Result<std::vector<TimedFrames>> time_in_turn(BrickRenderer& r, const Camera& cam, const RenderSettings& s,
                                               const std::vector<BrickFrameSettings>& frames, uint32_t size,
                                               int repeats, const std::function<Status()>& after_round) {

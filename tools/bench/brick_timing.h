@@ -22,15 +22,11 @@ struct TimedFrames {
   ImageRgba8 image;                    // the last frame
 };
 
-// Renders until every brick is resident (an error past 200 frames), then
-// the median wall and GPU time of `repeats` more frames (after a warm-up).
-Result<TimedFrames> time_converged(BrickRenderer& r, const Camera& cam, const RenderSettings& s,
-                                   const BrickFrameSettings& f, uint32_t size, int repeats);
-
-// The same for several frame settings of one view, timed in turn: each
-// converged and warmed up, then `repeats` rounds that draw each once, so a
-// busy machine's drift falls on all of them alike and their ratios hold
-// (skipping on against off). `after_round`, if set, runs after each round.
+// Frame settings of one view timed in turn: each rendered until every
+// brick is resident (an error past 200 frames) and warmed up, then
+// `repeats` rounds that draw each once, so a busy machine's drift falls on
+// all of them alike and their ratios hold (skipping on against off); the
+// median wall and GPU time of each. `after_round`, if set, runs after each round.
 Result<std::vector<TimedFrames>> time_in_turn(BrickRenderer& r, const Camera& cam, const RenderSettings& s,
                                               const std::vector<BrickFrameSettings>& frames, uint32_t size,
                                               int repeats, const std::function<Status()>& after_round = {});

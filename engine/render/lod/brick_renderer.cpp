@@ -1036,17 +1036,25 @@ class ScreenBoxes {
 // much tighter than the depths of the box's corners when the box is oblique.
 class TileFrusta {
  public:
-  TileFrusta(const LodView& v, const WarpAxis& ax, const WarpAxis& ay) : eye_(v.eye), columns_((ax.warped() + 7) / 8) {
-    const std::vector<glm::dvec2> x = ndc_spans(ax), y = ndc_spans(ay);
-    tiles_.resize(x.size() * y.size());
-    for (size_t ty = 0; ty < y.size(); ++ty)
-      for (size_t tx = 0; tx < x.size(); ++tx) {
+  // `rays`: storage kept by the caller between views (two vectors a tile: the
+  // centre ray's inverse per unit view depth, and how far the tile's rays
+  // stray from it per world axis per unit view depth).
+  TileFrusta(const LodView& v, const WarpAxis& ax, const WarpAxis& ay, std::vector<glm::dvec3>& rays)
+      : eye_(v.eye), columns_((ax.warped() + 7) / 8), rays_(rays) {
+    const size_t rows = (ay.warped() + 7) / 8;
+    rays_.resize(2 * columns_ * rows);
+    for (size_t ty = 0; ty < rows; ++ty) {
+      const glm::dvec2 y = ndc_span(ay, ty);
+      for (size_t tx = 0; tx < columns_; ++tx) {
+        const glm::dvec2 x = ndc_span(ax, tx);
         // The centre ray per unit view depth (the shader's raw_dir); an axis
         // it does not move along gets a huge inverse, never 0 * inf.
-        glm::dvec3 dir = v.forward + x[tx].x * v.right - y[ty].x * v.up;
+        glm::dvec3 dir = v.forward + x.x * v.right - y.x * v.up;
         dir = glm::mix(dir, glm::dvec3(1e-300), glm::equal(dir, glm::dvec3(0.0)));
-        tiles_[ty * x.size() + tx] = {1.0 / dir, x[tx].y * glm::abs(v.right) + y[ty].y * glm::abs(v.up)};
+        rays_[2 * (ty * columns_ + tx)] = 1.0 / dir;
+        rays_[2 * (ty * columns_ + tx) + 1] = x.y * glm::abs(v.right) + y.y * glm::abs(v.up);
       }
+    }
   }
 
   // A box whose corners span view depths `span`, made ready for depths():
@@ -1063,32 +1071,24 @@ class TileFrusta {
   // The view depths where tile (tx, ty)'s rays can meet the box, within
   // its corners' depths; empty (x > y) where none does.
   glm::dvec2 depths(uint32_t tx, uint32_t ty, const Box& box) const {
-    const Tile& t = tiles_[size_t(ty) * columns_ + tx];
-    const glm::dvec3 grow = std::max(box.span.y, 0.0) * t.spread;  // for the tile's other rays, at the farthest depth
-    const glm::dvec3 a = (box.lo - grow) * t.inv_dir, b = (box.hi + grow) * t.inv_dir;
+    const glm::dvec3* t = &rays_[2 * (size_t(ty) * columns_ + tx)];
+    const glm::dvec3 grow = std::max(box.span.y, 0.0) * t[1];  // for the tile's other rays, at the farthest depth
+    const glm::dvec3 a = (box.lo - grow) * t[0], b = (box.hi + grow) * t[0];
     const glm::dvec3 near = glm::min(a, b), far = glm::max(a, b);
     return {std::max({box.span.x, near.x, near.y, near.z}), std::min({box.span.y, far.x, far.y, far.z})};
   }
 
  private:
-  struct Tile {
-    glm::dvec3 inv_dir;  // 1 / the centre ray per unit view depth
-    glm::dvec3 spread;   // per unit view depth, how far the tile's rays stray from it per world axis
-  };
-  // Per tile along an axis: the centre and half-extent in NDC of its pixel centres.
-  static std::vector<glm::dvec2> ndc_spans(const WarpAxis& a) {
+  // Tile t along an axis: the centre and half-extent in NDC of its pixel centres.
+  static glm::dvec2 ndc_span(const WarpAxis& a, size_t t) {
     const uint32_t n = a.warped();
-    std::vector<glm::dvec2> out((n + 7) / 8);
-    auto ndc = [&](uint32_t px) { return a.from_warped(px + 0.5) / a.full * 2.0 - 1.0; };  // monotonic in px
-    for (uint32_t t = 0; t < out.size(); ++t) {
-      const double first = ndc(t * 8), last = ndc(std::min(t * 8 + 7, n - 1));
-      out[t] = glm::dvec2(0.5 * (first + last), 0.5 * (last - first) + 1e-5);
-    }
-    return out;
+    auto ndc = [&](size_t px) { return a.from_warped(px + 0.5) / a.full * 2.0 - 1.0; };  // monotonic in px
+    const double first = ndc(t * 8), last = ndc(std::min<size_t>(t * 8 + 7, n - 1));
+    return {0.5 * (first + last), 0.5 * (last - first) + 1e-5};
   }
   glm::dvec3 eye_;
   size_t columns_;
-  std::vector<Tile> tiles_;
+  std::vector<glm::dvec3>& rays_;
 };
 
 // The warped-grid pixels covering full-image rectangle r (identity without a warp).
@@ -1197,7 +1197,7 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
   for (auto& l : lists) l.clear();
   std::vector<glm::dvec2>& depths = tile_depths_;
   const ScreenBoxes screen(view);
-  const TileFrusta frusta(view, ax, ay);
+  std::optional<TileFrusta> frusta;  // built for the view's first brick with blocks
   size_t total = lists.size();
   const glm::vec2 all_depths(0.0f, std::numeric_limits<float>::infinity());
   for (uint32_t b = 0; b < boxes.size(); ++b) {
@@ -1223,10 +1223,11 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
       if (q.z == 0 || q.w == 0) continue;
       const glm::uvec2 q0 = glm::max(glm::uvec2(q.x, q.y) / 8u, t0);
       const glm::uvec2 q1 = glm::min((glm::uvec2(q.x + q.z, q.y + q.w) - 1u) / 8u, t1);
-      const TileFrusta::Box block = frusta.prepare(block_boxes[i], d);
+      if (!frusta) frusta.emplace(view, ax, ay, tile_rays_);
+      const TileFrusta::Box block = frusta->prepare(block_boxes[i], d);
       for (uint32_t y = q0.y; y <= q1.y; ++y)
         for (uint32_t x = q0.x; x <= q1.x; ++x) {
-          const glm::dvec2 c = frusta.depths(x, y, block);
+          const glm::dvec2 c = frusta->depths(x, y, block);
           if (!(c.x <= c.y)) continue;  // the tile's rays pass the block by
           glm::dvec2& e = depths[size_t(y - t0.y) * rw + (x - t0.x)];
           e = glm::dvec2(std::min(e.x, c.x), std::max(e.y, c.y));

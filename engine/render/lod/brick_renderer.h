@@ -116,8 +116,8 @@ struct BrickRendererOptions {
   // False: always the storage buffer.
   bool texel_cell_keys = true;
   // Tiled frames: each tile's entry for a walked brick carries the view
-  // depths its kept cells' blocks span there, and a tile no block touches
-  // drops the brick (build_tile_lists). False: every brick on every tile of
+  // depths where the tile's rays can meet its kept cells' blocks, and a tile
+  // whose rays meet none drops the brick (build_tile_lists). False: every brick on every tile of
   // its screen rectangle, marched over its whole box (tests pin the image).
   bool tile_depths = true;
   // The most blocks one view projects for them (each costs a screen
@@ -453,6 +453,7 @@ class BrickRenderer final : public VolumeRenderer {
   };
   std::vector<std::vector<TileEntry>> tile_entries_;  // build_tile_lists' scratch: per tile, kept between views
   std::vector<glm::dvec2> tile_depths_;               // build_tile_lists' scratch: a brick's depths per tile
+  std::vector<glm::dvec3> tile_rays_;                 // build_tile_lists' scratch: each tile's rays (TileFrusta)
   std::vector<BrickBox> march_world_;  // record_view's scratch: per drawn brick, the world box its rays march
   std::vector<uint8_t> walks_;         // record_view's scratch: per drawn brick, whether it walks its cells
   std::vector<glm::uvec2> blocks_;     // record_view's scratch: per drawn brick, its span of block_world_
