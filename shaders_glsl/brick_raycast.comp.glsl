@@ -478,6 +478,54 @@ bool walk_take(inout WalkFound f, CellWalk w, bool empty, bool extend, int n, bo
   return take && (empty || extend) && exit < float(n);
 }
 
+// Walks the cells from sample k of a ray whose run has ended: past the
+// empty ones (k moves on) and through the occupied ones after them (run_end:
+// where the run of samples ends), or to the end of its samples (k >= n). A
+// walk that stops at the grid's edge with samples left (rounding) walks on.
+void walk_to_run(inout int k, inout int run_end, vec3 e, vec3 dl, float i0, float offset, float dt, vec3 inv_step,
+                 float shift, uint cell_base, int n, bool extend, VxrRay ray) {
+  const float inv_cell = 1.0 / p.atlas_inv.w;
+  for (;;) {
+    // A 3D DDA from sample k's cell: a step is compares and adds, where
+    // finding each cell from a sample's position and computing its exit
+    // cost about twice as much. Two cells a step: the second cell's test
+    // does not wait for the first's (MRI E-A at step 0.5: 125-130 ms
+    // against 130-134 a cell a step and 130-141 before the DDA). One
+    // break per two cells, their bookkeeping by selects (walk_take): the
+    // MRI's E-A frame at step 1 (`vxr render --step 1 --window 75,200`)
+    // 48.2 ms against 52.4 with a break per test (medians of 5).
+    const float t = (i0 + float(k) + offset) * dt;  // from the index: no drift
+    const float s = p.atlas_inv.w;
+    CellWalk w;
+    w.cell = clamp(ivec3(floor((e + t * dl + 0.5) * inv_cell)), ivec3(0), ivec3(int(p.pass.y) - 1));
+    // An axis the ray does not move along never bounds it (+inf, never 0 * inf).
+    w.exits = mix(vec3(1.0 / 0.0),
+                  (vec3(w.cell + ivec3(greaterThan(dl, vec3(0.0)))) * s - 0.5 - e) * inv_step - shift,
+                  notEqual(dl, vec3(0.0)));
+    const ivec3 step_cell = ivec3(sign(dl));
+    const vec3 per_cell = s * abs(inv_step);
+    WalkFound f = WalkFound(false, false, w.cell, 0.0);
+    for (;;) {
+      const CellWalk w2 = walk_next(w, step_cell, per_cell);
+      const bool empty = cell_is_empty(cell_base, walk_cell_index(w.cell), ray);
+      const bool empty2 = cell_is_empty(cell_base, walk_cell_index(w2.cell), ray);
+      const bool go = walk_take(f, w, empty, extend, n, true) && walk_inside(w2);
+      const bool go2 = walk_take(f, w2, empty2, extend, n, go);
+      w = walk_next(w2, step_cell, per_cell);
+      if (!go2 || !walk_inside(w)) break;
+    }
+    // The empty cells before the run: jump to the first sample at or past
+    // the exit of the last one grown by half the band; the samples before
+    // it lie within the band the empty cells' ranges cover.
+    const float grow = 0.5 * VXR_CELL_BAND;
+    const int past_empty = max(k + 1, int(ceil(cell_exit(f.last_empty, e, inv_step, grow) - shift)));
+    k = f.skipped ? past_empty : k;
+    // Taking samples is always right: the run needs no margin.
+    run_end = f.occupied ? min(max(k + 1, int(ceil(f.run_exit))), n) : k;
+    if (k >= n || f.occupied) break;
+  }
+}
+
 // The ray's segment [t0, t1) inside brick b (its clip box and cut plane), in
 // t units (level-0 voxels along dir). False when it misses.
 bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
@@ -588,7 +636,13 @@ void main() {
     first = list.x;
     last = list.x + list.y;
   }
-  for (uint j = first; !VXR_SC_NO_BRICKS && j < last && !ray.done; ++j) {
+  // The loops over bricks, runs and walks test their exit last, behind an
+  // `if` for the first pass: lavapipe (Mesa 22.3) runs a loop's body
+  // once more, every lane masked, when the exit is tested first, since only a
+  // loop's back edge branches (MRI E-A at step 1: 38.7 -> 35.7 ms, the same
+  // samples and image).
+  uint j = first;
+  if (!VXR_SC_NO_BRICKS && j < last && !ray.done) for (;;) {
     // Every active lane of a subgroup is at the same j (the list is its
     // workgroup's, and a ray that ends leaves the loop): the broadcast says
     // so, for compilers that then load the record once per subgroup (GPUs'
@@ -596,113 +650,85 @@ void main() {
     const uvec4 entry = tile_lists ? items[j] : uvec4(j, 0u, 0u, 0u);
     const uint b = subgroupBroadcastFirst(entry.x);
     const BrickRecord br = brick_record(b);
-    if (!item_mode && !segment(br, dir, t0, t1)) continue;
-    if (tile_lists) {
+    bool hit = item_mode || segment(br, dir, t0, t1);
+    if (hit && tile_lists) {
       // The view depths where this tile's rays can meet the brick's kept cells (build_tile_lists).
       t0 = max(t0, uintBitsToFloat(entry.y) * ray_len);
       t1 = min(t1, uintBitsToFloat(entry.z) * ray_len);
-      if (!(t1 > t0)) continue;
+      hit = t1 > t0;
     }
-    // One-channel E-A carries its transparency as a product within a brick;
-    // each brick starts it again from the optical depth, as a multipass
-    // wave's ray does (unpack_ray), so every dispatch mode gives one image.
-    if (VXR_SC_CHANNELS == 1 && VXR_SC_MODEL == VXR_MODEL_EMISSION_ABSORPTION) ray.trans = exp(-ray.tau.x);
-    const vec3 e = br.eye.xyz;
-    g_atlas_origin = br.atlas.xyz;
-    const vec3 dl = dir * br.scale.xyz;
-    const float dt = P.march.x / length(dl);  // one local step, in t units
-    const float i0 = ceil(t0 / dt - offset);
-    const int n = int(ceil(t1 / dt - offset) - i0);
-    // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture),
-    // unless no cell of its box is empty (box_lo.w): then a walk finds nothing.
-    const bool cells = VXR_SC_CELLS && p.pass.y != 0u && br.atlas.w >= 0.0 && br.box_lo.w == 0.0;
-    const uint cell_base = !cells ? 0u
-                           : kReduceModel ? uint(br.atlas.w) * uint(VXR_SC_CHANNELS) * cell_count()
-                                          : b * cell_words();
-    // The walk in sample indices: sample k of this brick is at e + (k + shift) * step.
-    const vec3 inv_step = 1.0 / (dl * dt);
-    const float shift = i0 + offset, inv_cell = 1.0 / p.atlas_inv.w;
-    // Runs: a ray marches samples [k, run_end) without a test; where a run
-    // ends, it jumps the empty cells ahead and finds the next run's end by
-    // walking the occupied cells (cell tests only, in a CellWalk). The rays of a SIMD group
-    // (lavapipe runs 8 in lockstep) then pay for a walk only where one of
-    // them ends a run, not on nearly every sample as when each sample tested
-    // its own cell. MIP / MinIP runs are one cell: their test depends on the
-    // running value.
-    const bool extend = !kReduceModel;
-    const bool group_runs = cells;  // see the run loop below
-    int k = 0, run_end = cells ? 0 : n;
-    while (k < n && !ray.done) {
-      // `cells` first: without constant 106 the walk compiles out. lavapipe
-      // runs an if's code even where no lane takes it, and `k >= run_end`
-      // alone left a walk that no ray needs in every brick (the MRI's E-A
-      // frame without skipping: 74.3 -> 70.6 ms, `vxr bench peer`).
-      if (cells && k >= run_end) {
-        // A 3D DDA from sample k's cell: a step is compares and adds, where
-        // finding each cell from a sample's position and computing its exit
-        // cost about twice as much. Two cells a step: the second cell's test
-        // does not wait for the first's (MRI E-A at step 0.5: 125-130 ms
-        // against 130-134 a cell a step and 130-141 before the DDA). One
-        // break per two cells, their bookkeeping by selects (walk_take): the
-        // MRI's E-A frame at step 1 (`vxr render --step 1 --window 75,200`)
-        // 48.2 ms against 52.4 with a break per test (medians of 5).
-        const float t = (i0 + float(k) + offset) * dt;  // from the index: no drift
-        const float s = p.atlas_inv.w;
-        CellWalk w;
-        w.cell = clamp(ivec3(floor((e + t * dl + 0.5) * inv_cell)), ivec3(0), ivec3(int(p.pass.y) - 1));
-        // An axis the ray does not move along never bounds it (+inf, never 0 * inf).
-        w.exits = mix(vec3(1.0 / 0.0),
-                      (vec3(w.cell + ivec3(greaterThan(dl, vec3(0.0)))) * s - 0.5 - e) * inv_step - shift,
-                      notEqual(dl, vec3(0.0)));
-        const ivec3 step_cell = ivec3(sign(dl));
-        const vec3 per_cell = s * abs(inv_step);
-        WalkFound f = WalkFound(false, false, w.cell, 0.0);
-        for (;;) {
-          const CellWalk w2 = walk_next(w, step_cell, per_cell);
-          const bool empty = cell_is_empty(cell_base, walk_cell_index(w.cell), ray);
-          const bool empty2 = cell_is_empty(cell_base, walk_cell_index(w2.cell), ray);
-          const bool go = walk_take(f, w, empty, extend, n, true) && walk_inside(w2);
-          const bool go2 = walk_take(f, w2, empty2, extend, n, go);
-          w = walk_next(w2, step_cell, per_cell);
-          if (!go2 || !walk_inside(w)) break;
+    if (hit) {
+      // One-channel E-A carries its transparency as a product within a brick;
+      // each brick starts it again from the optical depth, as a multipass
+      // wave's ray does (unpack_ray), so every dispatch mode gives one image.
+      if (VXR_SC_CHANNELS == 1 && VXR_SC_MODEL == VXR_MODEL_EMISSION_ABSORPTION) ray.trans = exp(-ray.tau.x);
+      const vec3 e = br.eye.xyz;
+      g_atlas_origin = br.atlas.xyz;
+      const vec3 dl = dir * br.scale.xyz;
+      const float dt = P.march.x / length(dl);  // one local step, in t units
+      const float i0 = ceil(t0 / dt - offset);
+      const int n = int(ceil(t1 / dt - offset) - i0);
+      // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture),
+      // unless no cell of its box is empty (box_lo.w): then a walk finds nothing.
+      const bool cells = VXR_SC_CELLS && p.pass.y != 0u && br.atlas.w >= 0.0 && br.box_lo.w == 0.0;
+      const uint cell_base = !cells ? 0u
+                             : kReduceModel ? uint(br.atlas.w) * uint(VXR_SC_CHANNELS) * cell_count()
+                                            : b * cell_words();
+      // The walk in sample indices: sample k of this brick is at e + (k + shift) * step.
+      const vec3 inv_step = 1.0 / (dl * dt);
+      const float shift = i0 + offset;
+      // Runs: a ray marches samples [k, run_end) without a test; where a run
+      // ends, it jumps the empty cells ahead and finds the next run's end by
+      // walking the occupied cells (cell tests only, in a CellWalk). The rays of a SIMD group
+      // (lavapipe runs 8 in lockstep) then pay for a walk only where one of
+      // them ends a run, not on nearly every sample as when each sample tested
+      // its own cell. MIP / MinIP runs are one cell: their test depends on the
+      // running value.
+      const bool extend = !kReduceModel;
+      const bool group_runs = cells;  // see the run loop below
+      int k = 0, run_end = cells ? 0 : n;
+      // The first walk before the loop, each next one after a run: a brick's
+      // last walk, which finds no run, then ends the loop without a masked
+      // pass through the run's samples. `cells` first: without constant 106
+      // the walks compile out (lavapipe runs an if's code even where no lane
+      // takes it).
+      if (cells) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, shift, cell_base, n, extend, ray);
+      if (k < n) for (;;) {
+        // A run's samples in a loop of their own, with no run-end test inside:
+        // on lavapipe the MRI's E-A frame took 190 -> 170 ms with skipping, 330
+        // -> 270 without (`vxr bench peer`). With cells, a lane whose run ends
+        // first keeps taking its samples while another lane's run goes on,
+        // instead of waiting masked: the iteration is paid anyway, a sample in
+        // an empty cell changes nothing (nor one that cannot pass a MIP /
+        // MinIP running value: the value only moves away from it), and the
+        // lane's next walk starts further on (MRI E-A at step 0.5: SIMD
+        // iterations 2.10M -> 1.88M for 7% more samples taken; MRI MIP at step
+        // 0.75: 62.4 ms against 72.7, 5% more samples). The group's iterations are counted
+        // once, by the longest run left: a vote each sample (until no lane is in
+        // its run) costs lavapipe a loop over the lanes. A lane that ends or
+        // leaves the brick drops out; the others go on.
+        const int left = k < run_end && !ray.done ? run_end - k : 0;
+        const int iterations = group_runs ? subgroupMax(left) : left;
+        int i = 0;
+        if (iterations > 0) for (;;) {
+          // From the index: no drift. The segment is dt level-0 voxels long.
+          const float t = (i0 + float(k) + offset) * dt;
+          if (VXR_SC_SAMPLE_WORK == VXR_SAMPLE_SHADE) vxr_step(ray, P, e, dl, t, dt);
+          else g_probe += VXR_SC_SAMPLE_WORK == VXR_SAMPLE_FETCH_ONLY ? vxr_sample(e + t * dl).x : t;
+          ++taken;
+          // The crossing's normal needs its brick's voxels: shade it now.
+          if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
+          ++i;
+          ++k;
+          if (i >= iterations || k >= n || ray.done) break;
         }
-        // The empty cells before the run: jump to the first sample at or past
-        // the exit of the last one grown by half the band; the samples before
-        // it lie within the band the empty cells' ranges cover.
-        const float grow = 0.5 * VXR_CELL_BAND;
-        const int past_empty = max(k + 1, int(ceil(cell_exit(f.last_empty, e, inv_step, grow) - shift)));
-        k = f.skipped ? past_empty : k;
-        // Taking samples is always right: the run needs no margin.
-        run_end = f.occupied ? min(max(k + 1, int(ceil(f.run_exit))), n) : k;
-        if (k >= n) break;
-        if (!f.occupied) continue;  // empty up to the grid's edge: walk on from k
-      }
-      // A run's samples in a loop of their own, with no run-end test inside:
-      // on lavapipe the MRI's E-A frame took 190 -> 170 ms with skipping, 330
-      // -> 270 without (`vxr bench peer`). With cells, a lane whose run ends
-      // first keeps taking its samples while another lane's run goes on,
-      // instead of waiting masked: the iteration is paid anyway, a sample in
-      // an empty cell changes nothing (nor one that cannot pass a MIP /
-      // MinIP running value: the value only moves away from it), and the
-      // lane's next walk starts further on (MRI E-A at step 0.5: SIMD
-      // iterations 2.10M -> 1.88M for 7% more samples taken; MRI MIP at step
-      // 0.75: 62.4 ms against 72.7, 5% more samples). The group's iterations are counted
-      // once, by the longest run left: a vote each sample (until no lane is in
-      // its run) costs lavapipe a loop over the lanes. A lane that ends or
-      // leaves the brick drops out; the others go on.
-      const int left = k < run_end && !ray.done ? run_end - k : 0;
-      const int iterations = group_runs ? subgroupMax(left) : left;
-      for (int i = 0; i < iterations; ++i, ++k) {
         if (k >= n || ray.done) break;
-        // From the index: no drift. The segment is dt level-0 voxels long.
-        const float t = (i0 + float(k) + offset) * dt;
-        if (VXR_SC_SAMPLE_WORK == VXR_SAMPLE_SHADE) vxr_step(ray, P, e, dl, t, dt);
-        else g_probe += VXR_SC_SAMPLE_WORK == VXR_SAMPLE_FETCH_ONLY ? vxr_sample(e + t * dl).x : t;
-        ++taken;
-        // The crossing's normal needs its brick's voxels: shade it now.
-        if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
+        if (cells && k >= run_end) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, shift, cell_base, n, extend, ray);
+        if (k >= n) break;
       }
     }
+    ++j;
+    if (j >= last || ray.done) break;
   }
 
   // One atomic per subgroup, not per ray: contended atomics cost on CPUs.
