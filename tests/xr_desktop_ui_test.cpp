@@ -319,11 +319,13 @@ TEST_CASE("desktop viewer: playback of the 7-timepoint OME-TIFF shows the timepo
   steps.push_back("wait 2");
   steps.push_back("speed 0.5");  // 5 timepoints/s: a few frames each on lavapipe, so most are seen
   steps.push_back("play");
-  // A few frames apart, so that even a loaded machine's loader threads get the next timepoints in.
+  // Four frames apart, so that even a loaded machine's loader threads get the next timepoints in (two
+  // once showed timepoint 0 throughout, with another test on the second core); playback does not loop
+  // by default, so a longer window ends at the last timepoint, never back at 0.
   constexpr int kPlayed = 14;
   for (int i = 0; i < kPlayed; ++i) {
     steps.push_back("screenshot " + shot("play" + std::to_string(i)));
-    steps.push_back("wait 2");
+    steps.push_back("wait 4");
   }
   for (const std::string& s : {std::string("pause"), "screenshot " + shot("paused0"), std::string("wait 3"),
                               "screenshot " + shot("paused1")})
