@@ -709,7 +709,7 @@ void main() {
         // leaves the brick drops out; the others go on.
         const int left = k < run_end && !ray.done ? run_end - k : 0;
         const int iterations = group_runs ? subgroupMax(left) : left;
-        int i = 0;
+        const int stop = k + min(iterations, n - k);
         if (iterations > 0) for (;;) {
           // From the index: no drift. The segment is dt level-0 voxels long.
           const float t = (i0 + float(k) + offset) * dt;
@@ -718,9 +718,8 @@ void main() {
           ++taken;
           // The crossing's normal needs its brick's voxels: shade it now.
           if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
-          ++i;
           ++k;
-          if (i >= iterations || k >= n || ray.done) break;
+          if (k >= stop || ray.done) break;
         }
         if (k >= n || ray.done) break;
         if (cells && k >= run_end) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, shift, cell_base, n, extend, ray);

@@ -76,7 +76,7 @@ vec4 vxr_normalise(RaycastParams P, vec4 raw) {
   vec4 x = vec4(0.0);
   for (int c = 0; c < VXR_SC_CHANNELS; ++c) {
     vec4 w = P.window[c];
-    float v = clamp((raw[c] - w.x) / (w.y - w.x), 0.0, 1.0);
+    float v = clamp((raw[c] - w.x) * (1.0 / (w.y - w.x)), 0.0, 1.0);
     if (VXR_SC_GAMMA) {
       if (w.z != 1.0) v = pow(v, w.z);
     }
