@@ -483,8 +483,10 @@ bool walk_take(inout WalkFound f, CellWalk w, bool empty, bool extend, int n, bo
 // where the run of samples ends), or to the end of its samples (k >= n). A
 // walk that stops at the grid's edge with samples left (rounding) walks on.
 void walk_to_run(inout int k, inout int run_end, vec3 e, vec3 dl, float i0, float offset, float dt, vec3 inv_step,
-                 float shift, uint cell_base, int n, bool extend, VxrRay ray) {
+                 uint cell_base, int n, VxrRay ray) {
   const float inv_cell = 1.0 / p.atlas_inv.w;
+  const float shift = i0 + offset;  // sample k of the brick is at e + (k + shift) * step
+  const bool extend = !kReduceModel;  // MIP / MinIP runs are one cell
   for (;;) {
     // A 3D DDA from sample k's cell: a step is compares and adds, where
     // finding each cell from a sample's position and computing its exit
@@ -674,9 +676,8 @@ void main() {
       const uint cell_base = !cells ? 0u
                              : kReduceModel ? uint(br.atlas.w) * uint(VXR_SC_CHANNELS) * cell_count()
                                             : b * cell_words();
-      // The walk in sample indices: sample k of this brick is at e + (k + shift) * step.
+      // The walk in sample indices: sample k of this brick is at e + (k + i0 + offset) * step.
       const vec3 inv_step = 1.0 / (dl * dt);
-      const float shift = i0 + offset;
       // Runs: a ray marches samples [k, run_end) without a test; where a run
       // ends, it jumps the empty cells ahead and finds the next run's end by
       // walking the occupied cells (cell tests only, in a CellWalk). The rays of a SIMD group
@@ -684,7 +685,6 @@ void main() {
       // them ends a run, not on nearly every sample as when each sample tested
       // its own cell. MIP / MinIP runs are one cell: their test depends on the
       // running value.
-      const bool extend = !kReduceModel;
       const bool group_runs = cells;  // see the run loop below
       int k = 0, run_end = cells ? 0 : n;
       // The first walk before the loop, each next one after a run: a brick's
@@ -692,7 +692,7 @@ void main() {
       // pass through the run's samples. `cells` first: without constant 106
       // the walks compile out (lavapipe runs an if's code even where no lane
       // takes it).
-      if (cells) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, shift, cell_base, n, extend, ray);
+      if (cells) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, cell_base, n, ray);
       if (k < n) for (;;) {
         // A run's samples in a loop of their own, with no run-end test inside:
         // on lavapipe the MRI's E-A frame took 190 -> 170 ms with skipping, 330
@@ -722,7 +722,7 @@ void main() {
           if (k >= stop || ray.done) break;
         }
         if (k >= n || ray.done) break;
-        if (cells && k >= run_end) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, shift, cell_base, n, extend, ray);
+        if (cells && k >= run_end) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, cell_base, n, ray);
         if (k >= n) break;
       }
     }

@@ -6,7 +6,6 @@
 // Its share is taken against the ceiling kernel timed in turn with its
 // frames (the calibration printed first is only the device's figure).
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <optional>
