@@ -5,6 +5,7 @@
 // multi-level view of the procedural vessels.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <set>
 
 #include "golden.h"
@@ -106,31 +107,49 @@ TEST_CASE("brick render: single pass and multipass waves give the same image") {
   CHECK(ms.dispatches > 3);
 }
 
-TEST_CASE("brick render: tiled frames draw the tiles no brick touches with the brickless variant, same image") {
+TEST_CASE("brick render: tiled frames clear the tiles no brick touches, or draw them with the brickless variant: same image") {
   test::GpuTestScope scope;
   auto src = make(128);
-  auto r = renderer(*src);
   // Far away: the volume covers the middle of the image, most tiles touch no brick.
-  const Camera cam = orbit_camera(r->placement(), 30, 25, 3.0);
+  const Camera cam = orbit_camera(renderer(*src)->placement(), 30, 25, 3.0);
   BrickFrameSettings f;
   f.lod.force_level = 0;
   f.mode = BrickPassMode::kSinglePass;
-  BrickFrameStats ss, ts;
-  const ImageRgba8 single = converge(*r, cam, vessels(), f, 96, 96, &ss);
+  auto reference = renderer(*src);
+  BrickFrameStats ss;
+  const ImageRgba8 single = converge(*reference, cam, vessels(), f, 96, 96, &ss);
   f.mode = BrickPassMode::kTiled;
-  // A close view first fills the whole target: the far view's empty tiles must be written again.
-  const ImageRgba8 close = converge(*r, orbit_camera(r->placement(), 30, 25, 0.5), vessels(), f, 96, 96);
-  const ImageRgba8 tiled = converge(*r, cam, vessels(), f, 96, 96, &ts);
-  CHECK(close.pixels != single.pixels);
-  CHECK(test::looks_non_blank(tiled));
-  CHECK(tiled.pixels == single.pixels);
-  CHECK(ts.samples == ss.samples);
-  // After the cells were classified: the tiles whose rays walk cells, then
-  // those whose bricks all march without a walk (a variant without the
-  // cell code, where there are any), then the empty ones, each a dispatch.
-  CHECK(ts.classify_passes == 0);
-  CHECK(ts.tiles_empty > 0);
-  CHECK(ts.dispatches == 1 + (ts.tiles_plain > 0 ? 1 : 0) + 1);
+  std::vector<std::vector<float>> floats;
+  for (bool clear : {true, false}) {
+    INFO("clear_empty_tiles " << clear);
+    BrickRendererOptions o;
+    o.clear_empty_tiles = clear;
+    auto r = renderer(*src, o);
+    BrickFrameStats ts;
+    // A close view first fills the whole target: the far view's empty tiles must be written again.
+    const ImageRgba8 close = converge(*r, orbit_camera(r->placement(), 30, 25, 0.5), vessels(), f, 96, 96);
+    const ImageRgba8 tiled = converge(*r, cam, vessels(), f, 96, 96, &ts);
+    CHECK(close.pixels != single.pixels);
+    CHECK(test::looks_non_blank(tiled));
+    CHECK(tiled.pixels == single.pixels);
+    CHECK(ts.samples == ss.samples);
+    // After the cells were classified: the tiles whose rays walk cells, then
+    // those whose bricks all march without a walk (a variant without the
+    // cell code, where there are any), each a dispatch; the empty ones a
+    // clear, or a dispatch of their own.
+    CHECK(ts.classify_passes == 0);
+    CHECK(ts.tiles_empty > 0);
+    CHECK(ts.dispatches == 1 + (ts.tiles_plain > 0 ? 1 : 0) + (clear ? 0 : 1));
+    // Float pixels go through the accumulation image (cleared the same way) and a blit.
+    REQUIRE(r->render_float(orbit_camera(r->placement(), 30, 25, 0.5), vessels(), f, 96, 96).is_ok());
+    auto as_float = r->render_float(cam, vessels(), f, 96, 96);
+    REQUIRE(as_float.is_ok());
+    floats.push_back(std::move(as_float->rgba));
+  }
+  REQUIRE(floats.size() == 2);
+  CHECK(floats[0] == floats[1]);
+  CHECK(std::count(floats[0].begin(), floats[0].end(), 0.0f) > 0);  // the empty tiles
+  CHECK(std::count(floats[0].begin(), floats[0].end(), 0.0f) < long(floats[0].size()));
 }
 
 TEST_CASE("brick render: paged through the pool equals the single-texture path within 1/255") {

@@ -125,7 +125,9 @@ struct ViewUnderlay {
 // An image on the renderer's device that a view is drawn into.
 struct RenderTarget {
   VkImage image = VK_NULL_HANDLE;
-  VkImageView storage_view = VK_NULL_HANDLE;  // a view with STORAGE usage, if the image has one
+  // A view with STORAGE usage, if the image has one. The image then also
+  // needs TRANSFER_DST usage: the brick renderer may clear it.
+  VkImageView storage_view = VK_NULL_HANDLE;
   VkFormat format = VK_FORMAT_UNDEFINED;
   VkExtent2D extent{0, 0};
   // The layout the image is in before the recorded commands and is left in

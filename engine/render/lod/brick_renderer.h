@@ -120,6 +120,12 @@ struct BrickRendererOptions {
   // whose rays meet none drops the brick (build_tile_lists). False: every brick on every tile of
   // its screen rectangle, marched over its whole box (tests pin the image).
   bool tile_depths = true;
+  // Tiled frames: the tiles no brick touches hold what an empty ray
+  // finishes as, (0, 0, 0, 0) or opaque black. Where the view has no
+  // underlay and is its whole image (or draws into the accumulation image),
+  // one clear writes them instead of a dispatch of the variant without bricks.
+  // False: always the dispatch (tests pin that both agree).
+  bool clear_empty_tiles = true;
   // The most blocks one view projects for them (each costs a screen
   // rectangle and its tiles on the CPU, about 250 ns on lavapipe's 2-core
   // host: 2 ms a view); bricks past it march their whole box.
