@@ -38,7 +38,7 @@ layout(std430, binding = 1) readonly buffer Transfer { vec4 transfer_table[]; };
 layout(binding = 2, rgba8) uniform writeonly image2D out_image;
 layout(binding = 3, rgba32f) uniform image2D accum_image;
 layout(std430, binding = 4) readonly buffer Bricks { BrickRecord bricks[]; };
-layout(std430, binding = 5) buffer Counters { uint samples_lo; uint samples_hi; };
+layout(std430, binding = 5) buffer Counters { uint sample_counters[]; };  // see VXR_SAMPLE_COUNTERS
 layout(std430, binding = 6) readonly buffer Items { uvec4 items[]; };  // x: brick, y/z: tile origin in pixels
 layout(std140, binding = 7) uniform Params { RaycastParams view_params; };
 // Per atlas slot and channel, (min, max) texel value of each empty-space cell (BrickPool cell ranges).
@@ -733,8 +733,12 @@ void main() {
   // One atomic per subgroup, not per ray: contended atomics cost on CPUs.
   const uint total = subgroupAdd(taken);
   if (subgroupElect() && total > 0u) {
-    const uint old = atomicAdd(samples_lo, total);
-    if (old + total < old) atomicAdd(samples_hi, 1u);
+    const uint groups = gl_NumWorkGroups.x * gl_NumWorkGroups.y;
+    const uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    const uint share = (groups + VXR_SAMPLE_COUNTERS - 1u) / VXR_SAMPLE_COUNTERS;
+    const uint at = min(group / share, VXR_SAMPLE_COUNTERS - 1u) * VXR_SAMPLE_COUNTER_STRIDE;
+    const uint old = atomicAdd(sample_counters[at], total);
+    if (old + total < old) atomicAdd(sample_counters[at + 1u], 1u);
   }
   const bool probe = VXR_SC_SAMPLE_WORK != VXR_SAMPLE_SHADE;
   if (VXR_SC_WAVES && (flags & VXR_BRICK_STORE_ACCUM) != 0u) imageStore(accum_image, ivec2(pix), probe ? vec4(g_probe) : pack_ray(ray));

@@ -44,6 +44,14 @@ using uvec4 = glm::uvec4;
 // 4096 uvec4, 64 KiB.
 #define VXR_CELL_BITS_WINDOW_WORDS 16384u
 
+// The rays' sample counters (binding 5): VXR_SAMPLE_COUNTERS (lo, hi) pairs
+// of uints, VXR_SAMPLE_COUNTER_STRIDE uints (a cache line) apart, summed by
+// the host. Each share of a dispatch's workgroups adds to its own: a CPU
+// device gives each thread one contiguous share, so the threads' atomics
+// do not pull one line back and forth.
+#define VXR_SAMPLE_COUNTERS 16u
+#define VXR_SAMPLE_COUNTER_STRIDE 16u
+
 // What each sample does (specialisation constant 107, VXR_SC_SAMPLE_WORK):
 // the optical model, or for `vxr bench roofline`'s split of an E-A frame's
 // time the texture fetch alone or neither. The rays, bricks and walks stay

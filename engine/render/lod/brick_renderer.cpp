@@ -88,6 +88,19 @@ void full_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 dst_stage, VkAccess
   vkCmdPipelineBarrier2(cmd, &dep);
 }
 
+constexpr uint64_t kSampleCounterBytes = uint64_t(VXR_SAMPLE_COUNTERS) * VXR_SAMPLE_COUNTER_STRIDE * 4;
+
+// The samples the rays counted (brick_raycast.comp, VXR_SAMPLE_COUNTERS).
+uint64_t sum_sample_counters(const void* mapped) {
+  uint64_t sum = 0;
+  for (uint32_t i = 0; i < VXR_SAMPLE_COUNTERS; ++i) {
+    uint32_t c[2];
+    std::memcpy(c, static_cast<const char*>(mapped) + i * VXR_SAMPLE_COUNTER_STRIDE * 4, sizeof(c));
+    sum += uint64_t(c[0]) | (uint64_t(c[1]) << 32);
+  }
+  return sum;
+}
+
 // Clears `image` (GENERAL layout) to `color` after every command recorded
 // before, for the compute shaders recorded after.
 void clear_image(VkCommandBuffer cmd, VkImage image, const VkClearColorValue& color) {
@@ -310,7 +323,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->table_texels_,
                        gpu::create_buffer_view(ctx, r->table_.buffer, VK_FORMAT_R32G32B32A32_SFLOAT, 0,
                                                r->table_texels_fit_ ? r->table_.size : sizeof(glm::vec4)));
-  VXR_ASSIGN_OR_RETURN(r->counters_, gpu::create_buffer(ctx, {16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+  VXR_ASSIGN_OR_RETURN(r->counters_, gpu::create_buffer(ctx, {kSampleCounterBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                               gpu::MemoryIntent::kReadback, "brick counters"}));
   VXR_ASSIGN_OR_RETURN(r->items_, gpu::create_buffer(ctx, {uint64_t(options.max_work_items) * sizeof(glm::uvec4),
                                                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
@@ -1348,7 +1361,7 @@ Status BrickRenderer::begin_frame(VkCommandBuffer cmd, const BrickFrameSettings&
   table_used_ = items_used_ = bits_used_ = 0;
   tf_recorded_ = false;
   requests_.clear();
-  std::memset(counters_.mapped, 0, 16);
+  std::memset(counters_.mapped, 0, kSampleCounterBytes);
   ++frame_number_;
   pool_->begin_frame();
   last_upload_ = {};
@@ -1675,9 +1688,7 @@ Status BrickRenderer::draw_and_wait(const Camera& camera, const RenderSettings& 
     st.gpu_ms = double(ticks[1] - ticks[0]) * ctx_.timestamp_period_ns() * 1e-6;
   }
   st.render_ms = ms_since(t0) - st.traverse_ms;
-  uint32_t c[2];
-  std::memcpy(c, counters_.mapped, 8);
-  st.samples = uint64_t(c[0]) | (uint64_t(c[1]) << 32);
+  st.samples = sum_sample_counters(counters_.mapped);
   // Uploads after the frame's rays: what arrives is drawn from the next frame on.
   if (!requests_.empty()) {
     VXR_ASSIGN_OR_RETURN(UploadStats up, pool_->upload(requests_, frame.upload_budget_bytes));
@@ -1827,9 +1838,7 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
   }));
   VXR_RETURN_IF_ERROR(recorded);
   st.render_ms = ms_since(t0);
-  uint32_t c[2];
-  std::memcpy(c, counters_.mapped, 8);
-  st.samples = uint64_t(c[0]) | (uint64_t(c[1]) << 32);
+  st.samples = sum_sample_counters(counters_.mapped);
   ImageRgba8 img(width, height);
   VXR_RETURN_IF_ERROR(readback_.read(ctx_, target_, img.pixels.data(), img.pixels.size()));
   if (stats_out) *stats_out = st;
