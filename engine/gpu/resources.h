@@ -81,6 +81,10 @@ Result<Image> create_image(const Context& ctx, const ImageCreateInfo& info);
 // Bytes per texel of the formats vxr uses; 0 for others.
 uint32_t format_texel_bytes(VkFormat format);
 
+// Records a global memory barrier (synchronization2).
+void memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
+                    VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access);
+
 // Records a barrier on the whole buffer (synchronization2).
 void buffer_barrier(VkCommandBuffer cmd, VkBuffer buffer, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
                     VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access);

@@ -16,14 +16,9 @@ constexpr int kCopyDispatches = 8;
 constexpr uint32_t kVolume = 256, kGrid = 512, kSteps = 256;
 
 void compute_barrier(VkCommandBuffer cmd) {
-  VkMemoryBarrier2 b{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-  b.srcStageMask = b.dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
-  b.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
-  b.dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
-  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-  dep.memoryBarrierCount = 1;
-  dep.pMemoryBarriers = &b;
-  vkCmdPipelineBarrier2(cmd, &dep);
+  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                      VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
 }
 
 Result<double> time_copy(gpu::Context& ctx, int repeats) {
@@ -44,15 +39,8 @@ Result<double> time_copy(gpu::Context& ctx, int repeats) {
   // Defined contents: a fill keeps validation and the driver honest.
   VXR_RETURN_IF_ERROR(ctx.submit_and_wait([&](VkCommandBuffer cmd) {
     vkCmdFillBuffer(cmd, src.buffer, 0, VK_WHOLE_SIZE, 0x3f800000u);
-    VkMemoryBarrier2 b{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-    b.srcStageMask = VK_PIPELINE_STAGE_2_CLEAR_BIT;
-    b.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-    b.dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
-    b.dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
-    VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-    dep.memoryBarrierCount = 1;
-    dep.pMemoryBarriers = &b;
-    vkCmdPipelineBarrier2(cmd, &dep);
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   }));
   Status err;
   const double ms = median_ms(repeats, [&] {
@@ -82,16 +70,10 @@ Result<double> time_transfer(gpu::Context& ctx, int repeats) {
   const double ms = median_ms(repeats, [&] {
     return ctx.submit_and_wait([&](VkCommandBuffer cmd) {
       vkCmdFillBuffer(cmd, src.buffer, 0, VK_WHOLE_SIZE, 0x3f800000u);
-      VkMemoryBarrier2 b{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-      b.srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-      b.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-      b.dstStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-      b.dstAccessMask = VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT;
-      VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-      dep.memoryBarrierCount = 1;
-      dep.pMemoryBarriers = &b;
       for (int i = 0; i < kCopyDispatches; ++i) {
-        vkCmdPipelineBarrier2(cmd, &dep);
+        gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                            VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
+                            VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
         VkBufferCopy region{0, 0, kCopyBytes};
         vkCmdCopyBuffer(cmd, src.buffer, dst.buffer, 1, &region);
       }
