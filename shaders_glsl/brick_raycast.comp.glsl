@@ -30,10 +30,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // One atlas per channel, all with the same slot layout (BrickPool); slots past
 // the volume's channel count are bound to channel 0's atlas and never read.
 layout(binding = 0) uniform sampler3D atlas_tex[VXR_MAX_CHANNELS];
-// 2 * VXR_MAX_CHANNELS rows of VXR_TF_SIZE entries: rows 0..3 the transfer
-// table per channel, rows 4..7 in .x the count of entries 0..i with non-zero
-// opacity. A buffer, not a texture: on lavapipe a texelFetch goes through the
-// sampler's code, a buffer load is one load (the same floats either way).
+// The transfer buffer's rows (VXR_TF_ROWS, shared/brick_params.h): the
+// table, the opaque counts and the single-hue pairs per channel. A buffer,
+// not a texture: on lavapipe a texelFetch goes through the sampler's code, a
+// buffer load is one load (the same floats either way).
 layout(std430, binding = 1) readonly buffer Transfer { vec4 transfer_table[]; };
 layout(binding = 2, rgba8) uniform writeonly image2D out_image;
 layout(binding = 3, rgba32f) uniform image2D accum_image;
@@ -58,8 +58,8 @@ layout(std430, binding = 11) buffer CellKeys { float cell_keys[]; };
 // storage texel view, as binding 12.
 layout(binding = 16, r32f) uniform readonly imageBuffer cell_key_texels;
 layout(std430, binding = 13) buffer CellBits { uint cell_bits[]; };
-// Rows 0..3 of binding 1 again (the colour and opacity entries) as RGBA32F
-// texels, which lavapipe (Mesa 22) loads whole per ray; a uniform buffer at
+// Binding 1 again as RGBA32F texels, for the rays' table lookups, which
+// lavapipe (Mesa 22) loads whole per ray; a uniform buffer at
 // per-ray offsets loads component by component, a storage buffer ray by
 // ray with a branch each (same floats). A storage texel view: its imageLoad
 // is inlined, where a uniform one's texelFetch is a call to the sampler's
@@ -129,6 +129,13 @@ layout(constant_id = 114) const bool VXR_SC_CLASSIFY = true;
 // several times the loads and arithmetic of the filter below
 // (docs/skipping-perf.md, tenth round).
 layout(constant_id = 115) const uint VXR_SC_TEXEL_BYTES = 0u;
+
+// Every drawn channel's colours are one hue times a value (TransferTable::hue):
+// a lookup reads one texel of the channel's hue row (entries i and i + 1 of the
+// value and opacity) instead of two of its table, and gives the same floats
+// (the hue's components are 0 or 1). MRI E-A at step 0.5 in gray: 47.1-48.9
+// ms against 49.0-51.4 (docs/skipping-perf.md, twentieth round).
+layout(constant_id = 116) const bool VXR_SC_HUE_TABLES = false;
 
 // Brick b's record, read once per brick a ray enters.
 BrickRecord brick_record(uint b) {
@@ -238,10 +245,18 @@ vec4 vxr_sample(vec3 pos) {
   return v;
 }
 
+// Each channel's hue (VXR_SC_HUE_TABLES), read once per invocation.
+vec3 g_hue[VXR_MAX_CHANNELS];
+
 vec4 vxr_transfer(int channel, float x) {
   int i;
   float f;
   vxr_transfer_index(x, i, f);
+  if (VXR_SC_HUE_TABLES) {
+    const vec4 pair = imageLoad(transfer_rows, (VXR_TF_HUE_ROWS + channel) * VXR_TF_SIZE + i);
+    const vec2 value_opacity = mix(pair.xy, pair.zw, f);
+    return vec4(g_hue[channel] * value_opacity.x, value_opacity.y);
+  }
   const int row = channel * VXR_TF_SIZE + i;
   return mix(imageLoad(transfer_rows, row), imageLoad(transfer_rows, row + 1), f);
 }
@@ -308,7 +323,7 @@ vec4 finish_ray(VxrRay r) {
 // skipping off. The stored ranges bound every sample within VXR_CELL_BAND of
 // the cell, so rounding in a sample's position or in the jump's exit is
 // absorbed.
-float opaque_entries_upto(int c, int i) { return transfer_table[(VXR_MAX_CHANNELS + c) * VXR_TF_SIZE + i].x; }
+float opaque_entries_upto(int c, int i) { return transfer_table[(VXR_TF_OPAQUE_ROWS + c) * VXR_TF_SIZE + i].x; }
 
 // What the cell test needs of a cell's range under the view's window and
 // transfer function, computed once per frame and cell (VXR_BRICK_CLASSIFY)
@@ -576,6 +591,9 @@ void main() {
     classify_cells();
     return;
   }
+  if (VXR_SC_HUE_TABLES)
+    for (int c = 0; c < VXR_SC_CHANNELS; ++c)
+      g_hue[c] = imageLoad(transfer_rows, (VXR_TF_HUE_ROWS + c + 1) * VXR_TF_SIZE - 1).rgb;
   const uint width = P.control.y, height = P.control.z;
   // Each run of 8 invocations (lavapipe's SIMD group) takes a 4x2 pixel
   // block, not a row of 8: closer rays, which skip and end more alike.

@@ -323,6 +323,34 @@ TEST_CASE("brick features: empty-space skip rule per model (CPU)") {
   CHECK_FALSE(brick_may_contribute(s, build_transfer_table(s), second_lit));
 }
 
+TEST_CASE("brick features: single-hue colour maps factor as hue times value, others do not (CPU)") {
+  RenderSettings s;
+  s.channels.resize(4);
+  const std::pair<const char*, std::optional<glm::vec3>> maps[] = {
+      {"gray", glm::vec3(1, 1, 1)},    {"green", glm::vec3(0, 1, 0)}, {"magenta", glm::vec3(1, 0, 1)},
+      {"#00ffff", glm::vec3(0, 1, 1)}, {"hot", std::nullopt},        {"viridis", std::nullopt},
+      {"#ff8000", std::nullopt}};
+  for (const auto& [name, hue] : maps) {
+    CAPTURE(name);
+    s.channels[2].colormap = name;
+    const TransferTable t = build_transfer_table(s);
+    REQUIRE(t.hue[2].has_value() == hue.has_value());
+    if (!hue) continue;
+    CHECK(*t.hue[2] == *hue);
+    // The rule the GPU's hue rows rely on: every colour is the hue times one value, exactly.
+    for (int i = 0; i < VXR_TF_SIZE; ++i) {
+      const glm::vec4 e = t.rgba[2 * VXR_TF_SIZE + i];
+      const float v = std::max({e.r, e.g, e.b});
+      CHECK(glm::vec3(e) == *hue * v);
+    }
+  }
+  // Colour points factor where they stay on one hue.
+  s.channels[1].color_points = {{0.0, {0, 0, 0}}, {0.5, {0.25, 0, 0.25}}, {1.0, {1, 0, 1}}};
+  CHECK(build_transfer_table(s).hue[1] == glm::vec3(1, 0, 1));
+  s.channels[1].color_points = {{0.0, {0, 0, 0}}, {1.0, {1, 0.5, 0}}};
+  CHECK_FALSE(build_transfer_table(s).hue[1].has_value());
+}
+
 TEST_CASE("brick features: multipass carries the ray state of every model that fits a texel (CPU)") {
   RenderSettings s;
   for (OpticalModel m : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
@@ -363,6 +391,46 @@ TEST_CASE("brick features: every model gives the same image multipass, tiled, an
     CHECK(converge(*r, cam, s, f, 64, 64).pixels == multi.pixels);
     f.lod.skip_empty = false;
     CHECK(converge(*r, cam, s, f, 64, 64).pixels == multi.pixels);
+  }
+}
+
+TEST_CASE("brick features: lookups through the single-hue rows give the images of the table itself") {
+  test::GpuTestScope scope;
+  auto src = vessels_source();
+  const Camera cam = orbit_camera({{64, 64, 64}, {1, 1, 1}}, 30, 25, 1.25);
+  struct Variant {
+    OpticalModel model;
+    const char* colormap;
+    DepthColorMode depth;
+  };
+  // The rows serve E-A and emission (a lookup every sample), not MIP (one a ray), nor hot (no hue).
+  for (const Variant& v : {Variant{OpticalModel::kEmissionAbsorption, "gray", DepthColorMode::kOff},
+                           Variant{OpticalModel::kEmission, "green", DepthColorMode::kOff},
+                           Variant{OpticalModel::kEmissionAbsorption, "cyan", DepthColorMode::kAxisZ},
+                           Variant{OpticalModel::kEmissionAbsorption, "hot", DepthColorMode::kOff},
+                           Variant{OpticalModel::kMip, "magenta", DepthColorMode::kOff}}) {
+    const std::string model = optical_model_name(v.model);
+    CAPTURE(model);
+    CAPTURE(v.colormap);
+    RenderSettings s = vessels(v.model);
+    s.channels[0].colormap = v.colormap;
+    s.depth_color = v.depth;
+    s.step_voxels = 0.5;
+    BrickFrameSettings f;
+    f.lod.force_level = 0;
+    std::vector<ImageRgba8> images;
+    for (bool hue_tables : {true, false}) {
+      BrickRendererOptions o;
+      o.pool.slots = {8, 8, 8};
+      o.hue_tables = hue_tables;
+      auto r = BrickRenderer::create(test::gpu_context(), *src, o);
+      REQUIRE(r.is_ok());
+      BrickFrameStats st;
+      images.push_back(converge(**r, cam, s, f, 64, 64, &st));
+      CHECK(st.hue_lookups == (hue_tables && std::string(v.colormap) != "hot" && v.model != OpticalModel::kMip));
+    }
+    CHECK(test::looks_non_blank(images[0]));
+    CHECK(images[0].pixels == images[1].pixels);
   }
 }
 

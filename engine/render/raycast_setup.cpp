@@ -88,7 +88,10 @@ shader::RaycastParams pack_params(const RaycastSetup& r, bool has_depth_image) {
   p.control = glm::uvec4(model, r.width, r.height, r.max_steps);
   p.control2 = glm::uvec4(r.blend == ChannelBlend::kAdditive ? VXR_BLEND_ADDITIVE : VXR_BLEND_COMPOSITE,
                           r.iso_channel, r.opacity_correction ? 0u : 1u, 0);
-  for (int c = 0; c < VXR_MAX_CHANNELS; ++c) p.window[c] = glm::vec4(r.window[c]);
+  for (int c = 0; c < VXR_MAX_CHANNELS; ++c) {
+    glm::vec4& w = p.window[c] = glm::vec4(r.window[c]);
+    if (w.w != 0.0f) w.w = 1.0f / (w.y - w.x);  // the rays' scale: lavapipe divided again every sample
+  }
   return p;
 }
 

@@ -31,6 +31,20 @@ std::string num(double v) {
   return b;
 }
 
+// The hue of one channel's entries, where every colour is hue * s (see TransferTable::hue).
+std::optional<glm::vec3> factor_hue(const glm::vec4* entries) {
+  glm::vec3 hue(0.0f);
+  for (int i = 0; i < VXR_TF_SIZE; ++i)
+    for (int k = 0; k < 3; ++k)
+      if (entries[i][k] != 0.0f) hue[k] = 1.0f;
+  for (int i = 0; i < VXR_TF_SIZE; ++i) {
+    const glm::vec3 rgb(entries[i]);
+    const float s = hue.r != 0.0f ? rgb.r : hue.g != 0.0f ? rgb.g : rgb.b;
+    if (hue * s != rgb) return std::nullopt;
+  }
+  return hue;
+}
+
 }  // namespace
 
 glm::dvec4 TransferTable::lookup(int channel, double x) const {
@@ -121,6 +135,7 @@ TransferTable build_transfer_table(const RenderSettings& s) {
       const double a = ch.opacity_points.empty() ? x : piecewise<OpacityPoint, double>(ch.opacity_points, x, opacity_of);
       t.rgba[size_t(c) * VXR_TF_SIZE + i] = glm::vec4(glm::dvec4(rgb, a));
     }
+    t.hue[c] = factor_hue(&t.rgba[size_t(c) * VXR_TF_SIZE]);
   }
   return t;
 }

@@ -2,7 +2,9 @@
 // read, and the checks that turn bad settings into one clear message.
 #pragma once
 
+#include <array>
 #include <glm/glm.hpp>
+#include <optional>
 #include <vector>
 
 #include "core/status.h"
@@ -15,6 +17,12 @@ namespace vxr {
 // colour (rgb) and opacity (a) at window-normalised x = i / (VXR_TF_SIZE - 1).
 struct TransferTable {
   std::vector<glm::vec4> rgba;
+  // Per channel, the hue h (each component 0 or 1) with rgb = h * s at every
+  // entry, s the entry's one value: a single-hue colour map (gray, red, ...,
+  // yellow, #00ff00). The GPU then reads one texel a lookup (entries i and
+  // i + 1 of s and opacity) and gets the same floats. None where the colours
+  // do not factor so (hot, viridis, #ff8000, most colour points).
+  std::array<std::optional<glm::vec3>, VXR_MAX_CHANNELS> hue;
   glm::dvec4 at(int channel, int i) const { return glm::dvec4(rgba[size_t(channel) * VXR_TF_SIZE + i]); }
   // The same interpolation as vxr_transfer_table() in raycast_core.glsl, in double.
   glm::dvec4 lookup(int channel, double x) const;

@@ -70,13 +70,13 @@ float vxr_segment_depth(RaycastParams P, float tau) {
   return P.control2.z == 0u ? tau : -log(max(1.0 - min(tau, 1.0), 1e-30));
 }
 
-// Window (lo..hi -> 0..1, clamped) then gamma, per channel. Channels past
-// the volume's count stay 0 (nothing reads them).
+// Window (lo..hi -> 0..1, clamped; w.w is 1 / (hi - lo)) then gamma, per
+// channel. Channels past the volume's count stay 0 (nothing reads them).
 vec4 vxr_normalise(RaycastParams P, vec4 raw) {
   vec4 x = vec4(0.0);
   for (int c = 0; c < VXR_SC_CHANNELS; ++c) {
     vec4 w = P.window[c];
-    float v = clamp((raw[c] - w.x) * (1.0 / (w.y - w.x)), 0.0, 1.0);
+    float v = clamp((raw[c] - w.x) * w.w, 0.0, 1.0);
     if (VXR_SC_GAMMA) {
       if (w.z != 1.0) v = pow(v, w.z);
     }

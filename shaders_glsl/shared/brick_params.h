@@ -19,6 +19,17 @@ using uvec4 = glm::uvec4;
 // it, which absorbs rounding in the walk and in samples' positions.
 #define VXR_CELL_BAND (1.0 / 64.0)
 
+// The transfer buffer (bindings 1 and 12): rows of VXR_TF_SIZE RGBA32F
+// entries, three per channel c (VXR_MAX_CHANNELS channels):
+//   row c: the transfer table (colour, opacity; TransferTable::rgba);
+//   row VXR_TF_OPAQUE_ROWS + c: in .x the count of entries 0..i with non-zero opacity;
+//   row VXR_TF_HUE_ROWS + c, where the channel's colours are one hue h times a
+//   value s (TransferTable::hue): entry i < VXR_TF_SIZE - 1 holds (s, opacity)
+//   of entries i and i + 1, so a lookup is one texel; the last entry holds h.
+#define VXR_TF_OPAQUE_ROWS VXR_MAX_CHANNELS
+#define VXR_TF_HUE_ROWS (2 * VXR_MAX_CHANNELS)
+#define VXR_TF_ROWS (3 * VXR_MAX_CHANNELS)
+
 // pass.z flags
 #define VXR_BRICK_LOAD_ACCUM 1u   // continue the rays from the accumulation image
 #define VXR_BRICK_STORE_ACCUM 2u  // write the rays' state to the accumulation image

@@ -135,12 +135,13 @@ std::string format_stats(const BrickFrameStats& s) {
   std::snprintf(buf, sizeof(buf),
                 "visited %llu drawn %llu (fallback %llu) empty %llu culled %llu missing %llu samples %llu "
                 "uploaded %u bricks %.2f MiB hit %.1f%% traverse %.2f ms render %.2f ms; cells walked in %u bricks; "
-                "tile entries %u from %u blocks, tiles without walks %u, without bricks %u",
+                "tile entries %u from %u blocks, tiles without walks %u, without bricks %u%s",
                 (unsigned long long)s.lod.visited, (unsigned long long)s.lod.drawn,
                 (unsigned long long)s.lod.fallback, (unsigned long long)s.lod.skipped_empty,
                 (unsigned long long)s.lod.culled, (unsigned long long)s.lod.missing, (unsigned long long)s.samples,
                 s.bricks_uploaded, double(s.bytes_uploaded) / (1 << 20), 100.0 * s.hit_rate, s.traverse_ms,
-                s.render_ms, s.bricks_walked, s.tile_entries, s.tile_blocks, s.tiles_plain, s.tiles_empty);
+                s.render_ms, s.bricks_walked, s.tile_entries, s.tile_blocks, s.tiles_plain, s.tiles_empty,
+                s.hue_lookups ? "; colours from single-hue rows" : "");
   return buf;
 }
 
@@ -281,14 +282,14 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   // inline, where a storage buffer loads ray by ray with a branch each and
   // a uniform buffer at per-ray offsets component by component
   // (docs/skipping-perf.md, fifth and seventh rounds).
-  const uint64_t tf_bytes = uint64_t(VXR_TF_SIZE) * 2 * VXR_MAX_CHANNELS * sizeof(glm::vec4);
+  const uint64_t tf_bytes = uint64_t(VXR_TF_SIZE) * VXR_TF_ROWS * sizeof(glm::vec4);
   VXR_ASSIGN_OR_RETURN(r->transfer_buf_,
                        gpu::create_buffer(ctx, {tf_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
                                                               VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
                                                               VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                                 gpu::MemoryIntent::kDeviceLocal, "transfer function"}));
   VXR_ASSIGN_OR_RETURN(r->transfer_rows_, gpu::create_buffer_view(ctx, r->transfer_buf_.buffer,
-                                                                   VK_FORMAT_R32G32B32A32_SFLOAT, 0, tf_bytes / 2));
+                                                                   VK_FORMAT_R32G32B32A32_SFLOAT, 0, tf_bytes));
   VXR_ASSIGN_OR_RETURN(r->tf_staging_, gpu::create_buffer(ctx, {tf_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                                                 gpu::MemoryIntent::kUpload, "transfer function staging"}));
   VXR_ASSIGN_OR_RETURN(r->table_, gpu::create_buffer(ctx, {uint64_t(options.max_bricks) * sizeof(shader::BrickRecord),
@@ -477,16 +478,27 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
   if (tf_recorded_)
     return invalid_argument("record_view: the views of one frame must share one transfer function "
                             "(same colormap, window and opacity settings)");
-  const size_t bytes = table.rgba.size() * sizeof(glm::vec4);
-  if (2 * bytes != tf_staging_.size) return internal_error("transfer table has an unexpected size");
-  std::memcpy(tf_staging_.mapped, table.rgba.data(), bytes);
-  // Rows past the table: per channel, how many entries 0..i have non-zero
-  // opacity (the cell test asks "is any entry in i0..i1 opaque" in two fetches).
-  auto* counts = static_cast<glm::vec4*>(tf_staging_.mapped) + table.rgba.size();
+  if (table.rgba.size() != size_t(VXR_TF_SIZE) * VXR_MAX_CHANNELS ||
+      tf_staging_.size != uint64_t(VXR_TF_SIZE) * VXR_TF_ROWS * sizeof(glm::vec4))
+    return internal_error("transfer table has an unexpected size");
+  // The rows of shared/brick_params.h (VXR_TF_ROWS).
+  auto* rows = static_cast<glm::vec4*>(tf_staging_.mapped);
+  std::memcpy(rows, table.rgba.data(), table.rgba.size() * sizeof(glm::vec4));
   for (int c = 0; c < VXR_MAX_CHANNELS; ++c) {
+    // How many entries 0..i have non-zero opacity: the cell test asks "is
+    // any entry in i0..i1 opaque" in two fetches.
+    glm::vec4* counts = rows + size_t(VXR_TF_OPAQUE_ROWS + c) * VXR_TF_SIZE;
     const auto upto = opaque_entries_upto(table, c);
-    for (int i = 0; i < VXR_TF_SIZE; ++i) counts[size_t(c) * VXR_TF_SIZE + i] = glm::vec4(float(upto[i]), 0.0f, 0.0f, 0.0f);
+    for (int i = 0; i < VXR_TF_SIZE; ++i) counts[i] = glm::vec4(float(upto[i]), 0.0f, 0.0f, 0.0f);
+    glm::vec4* pairs = rows + size_t(VXR_TF_HUE_ROWS + c) * VXR_TF_SIZE;
+    const glm::vec4* entry = &table.rgba[size_t(c) * VXR_TF_SIZE];
+    const std::optional<glm::vec3>& hue = table.hue[c];
+    const auto value = [&](int i) { return hue->r != 0.0f ? entry[i].r : hue->g != 0.0f ? entry[i].g : entry[i].b; };
+    for (int i = 0; i + 1 < VXR_TF_SIZE; ++i)
+      pairs[i] = hue ? glm::vec4(value(i), entry[i].a, value(i + 1), entry[i + 1].a) : glm::vec4(0.0f);
+    pairs[VXR_TF_SIZE - 1] = glm::vec4(hue.value_or(glm::vec3(0.0f)), 0.0f);
   }
+  tf_hues_ = table.hue;
   // The previous frame's rays may still read the table; this frame's read it after the copy.
   const VkAccessFlags2 reads = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_UNIFORM_READ_BIT;
   gpu::buffer_barrier(cmd, transfer_buf_.buffer, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, reads,
@@ -519,7 +531,18 @@ Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSett
   v.gamma = any_gamma(s, v.channels);
   v.naive_opacity = !s.opacity_correction;
   v.composite = s.blend == ChannelBlend::kComposite;
+  v.hue_tables = hue_lookups(model);
   return variant(v);
+}
+
+bool BrickRenderer::hue_lookups(uint32_t model) const {
+  // Only E-A and emission look up every sample; a variant more for the
+  // others' one lookup a ray would only cost its compile.
+  if (!opt_.hue_tables || (model != VXR_MODEL_EMISSION_ABSORPTION && model != VXR_MODEL_EMISSION)) return false;
+  // Every channel the shader may look up (the iso channel need not be drawn).
+  for (uint32_t c = 0; c < channels(); ++c)
+    if (!tf_hues_[c]) return false;
+  return true;
 }
 
 Result<const gpu::ComputePipeline*> BrickRenderer::classify_pipeline(const RenderSettings& s, uint32_t model) {
@@ -550,7 +573,8 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& 
       {112, v.composite ? uint32_t(VXR_BLEND_COMPOSITE) : uint32_t(VXR_BLEND_ADDITIVE)},
       {113, v.waves},
       {114, v.classify},
-      {115, v.texel_bytes}}};
+      {115, v.texel_bytes},
+      {116, v.hue_tables}}};
   VariantKey key;  // the constants' values identify the variant
   for (size_t i = 0; i < constants.size(); ++i) key[i] = constants[i].value;
   std::map<VariantKey, gpu::ComputePipeline>& variants = pipes_->variants;
@@ -819,6 +843,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                                     (reduce && walk.cell_size >= 8.0 * s.step_voxels));
   const uint32_t cells_per_axis = cells ? walk.cells_per_axis : 0u;
   if (!cells && stats) stats->bricks_walked = 0;  // record_view counted the bricks that would walk
+  if (stats) stats->hue_lookups = hue_lookups(model);
   const uint32_t range_cells_per_axis = pool_->cells().cells_per_axis;
   // The records as texels of the whole table where the device's texel
   // buffers hold it (binding 15, the view's first at p.records.x); the E-A

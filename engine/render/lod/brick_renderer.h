@@ -75,7 +75,7 @@ namespace vxr {
 // constants' values, BrickRenderer::ShaderVariant). Renderers on one gpu::Context may
 // share them: lavapipe compiles each variant on the CPU, which dominates
 // creating a renderer for a small volume (tests, the stability suite).
-inline constexpr size_t kVariantConstants = 16;  // brick_raycast.comp's ids 100..115
+inline constexpr size_t kVariantConstants = 17;  // brick_raycast.comp's ids 100..116
 using VariantKey = std::array<uint32_t, kVariantConstants>;
 struct BrickPipelines {
   std::map<VariantKey, gpu::ComputePipeline> variants;
@@ -126,6 +126,12 @@ struct BrickRendererOptions {
   // one clear writes them instead of a dispatch of the variant without bricks.
   // False: always the dispatch (tests pin that both agree).
   bool clear_empty_tiles = true;
+  // Where every channel's colour map is one hue times a value (gray, red,
+  // ..., yellow: TransferTable::hue), E-A and emission rays look a sample up in one texel
+  // of that factored table instead of two of the table itself: the same
+  // floats, about 4% of an E-A frame on lavapipe. False: always the table
+  // (tests pin that both agree).
+  bool hue_tables = true;
   // The most blocks one view projects for them (each costs a screen
   // rectangle and its tiles on the CPU, about 250 ns on lavapipe's 2-core
   // host: 2 ms a view); bricks past it march their whole box.
@@ -332,6 +338,7 @@ class BrickRenderer final : public VolumeRenderer {
     bool waves = false;      // its dispatches carry rays between passes (BrickPassMode::kMultipass)
     bool classify = false;   // the cell classification pass's pipeline (no other dispatch carries its code)
     uint32_t texel_bytes = 0;  // AtlasReads::texel_bytes
+    bool hue_tables = false;   // lookups through the single-hue rows (TransferTable::hue)
   };
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
   // features), for whether its dispatches use empty-space cells, the
@@ -339,6 +346,9 @@ class BrickRenderer final : public VolumeRenderer {
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, uint32_t texel_bytes,
                                                    bool cells, FastReads fast, SampleWork work, bool waves,
                                                    bool no_bricks = false);
+  // Whether rays of `model` (VXR_MODEL_*) look colours up in the single-hue
+  // rows (BrickRendererOptions::hue_tables, the uploaded table's hues).
+  bool hue_lookups(uint32_t model) const;
   // The classification pass's pipeline: only what classify_cells reads is specialised.
   Result<const gpu::ComputePipeline*> classify_pipeline(const RenderSettings& s, uint32_t model);
   // The pipeline for these constants, built on first use.
@@ -481,6 +491,7 @@ class BrickRenderer final : public VolumeRenderer {
   size_t table_used_ = 0, items_used_ = 0, bits_used_ = 0;
   bool tf_recorded_ = false;
   std::vector<glm::vec4> tf_uploaded_;
+  std::array<std::optional<glm::vec3>, VXR_MAX_CHANNELS> tf_hues_;  // tf_uploaded_'s (TransferTable::hue)
   std::vector<ChunkKey> pending_;    // streaming: requested, not yet copied in
   std::vector<ChunkKey> requests_;   // render(): the frame's requests, read after it
   uint64_t frame_number_ = 0;
