@@ -130,12 +130,6 @@ layout(constant_id = 114) const bool VXR_SC_CLASSIFY = true;
 // (docs/skipping-perf.md, tenth round).
 layout(constant_id = 115) const uint VXR_SC_TEXEL_BYTES = 0u;
 
-// Every drawn channel's colours are one hue times a value (TransferTable::hue):
-// a lookup reads one texel of the channel's hue row (entries i and i + 1 of the
-// value and opacity) instead of two of its table, and gives the same floats
-// (the hue's components are 0 or 1). MRI E-A at step 0.5 in gray: 47.1-48.9
-// ms against 49.0-51.4 (docs/skipping-perf.md, twentieth round).
-layout(constant_id = 116) const bool VXR_SC_HUE_TABLES = false;
 
 // Brick b's record, read once per brick a ray enters.
 BrickRecord brick_record(uint b) {
@@ -248,15 +242,28 @@ vec4 vxr_sample(vec3 pos) {
 // Each channel's hue (VXR_SC_HUE_TABLES), read once per invocation.
 vec3 g_hue[VXR_MAX_CHANNELS];
 
-vec4 vxr_transfer(int channel, float x) {
+vec3 vxr_hue(int channel) { return g_hue[channel]; }
+
+// VXR_SC_HUE_TABLES: one texel of the channel's hue row holds the value and
+// opacity of entries i and i + 1, where the table itself takes two (MRI E-A
+// at step 0.5 in gray: 47.1-48.9 ms against 49.0-51.4, docs/skipping-perf.md,
+// twentieth round).
+vec2 vxr_transfer_value(int channel, float x) {
   int i;
   float f;
   vxr_transfer_index(x, i, f);
+  const vec4 pair = imageLoad(transfer_rows, (VXR_TF_HUE_ROWS + channel) * VXR_TF_SIZE + i);
+  return mix(pair.xy, pair.zw, f);
+}
+
+vec4 vxr_transfer(int channel, float x) {
   if (VXR_SC_HUE_TABLES) {
-    const vec4 pair = imageLoad(transfer_rows, (VXR_TF_HUE_ROWS + channel) * VXR_TF_SIZE + i);
-    const vec2 value_opacity = mix(pair.xy, pair.zw, f);
+    const vec2 value_opacity = vxr_transfer_value(channel, x);
     return vec4(g_hue[channel] * value_opacity.x, value_opacity.y);
   }
+  int i;
+  float f;
+  vxr_transfer_index(x, i, f);
   const int row = channel * VXR_TF_SIZE + i;
   return mix(imageLoad(transfer_rows, row), imageLoad(transfer_rows, row + 1), f);
 }
@@ -264,7 +271,8 @@ vec4 vxr_transfer(int channel, float x) {
 // A ray's state between passes in one RGBA32F texel. The CPU sends only
 // variants whose state fits to the multipass waves (brick_state_fits_texel);
 // the others march in one dispatch (tiled or single pass) and never get here.
-//   EA (one channel, or composite): colour and optical depth.
+//   EA (one channel, or composite): colour and optical depth (kHueSums: the
+//   value times the hue, and back).
 //   emission: the colour summed over channels (the finish sums them anyway).
 //   MIP/MinIP, one channel: the extreme value, its depth coordinate, count.
 //   average, <= 3 channels: the length-weighted sums and the length.
@@ -276,7 +284,7 @@ vec4 pack_ray(VxrRay r) {
   if (m == VXR_MODEL_AVERAGE) return vec4(r.reduce.xyz, r.count);
   if (m == VXR_MODEL_ISOSURFACE) return r.done ? r.acc[0] : vec4(r.prev_value, r.prev_t, 0.0, 0.0);
   if (m == VXR_MODEL_EMISSION) return vec4(r.acc[0].rgb + r.acc[1].rgb + r.acc[2].rgb + r.acc[3].rgb, 0.0);
-  return vec4(r.acc[0].rgb, r.tau.x);
+  return vec4(kHueSums ? g_hue[0] * r.acc[0].a : r.acc[0].rgb, r.tau.x);
 }
 
 VxrRay unpack_ray(vec4 v) {
@@ -301,7 +309,9 @@ VxrRay unpack_ray(vec4 v) {
   } else if (m == VXR_MODEL_EMISSION) {
     r.acc[0].rgb = v.rgb;
   } else {
-    r.acc[0].rgb = v.rgb;
+    // kHueSums: the packed colour is the hue times the value; its largest component is the value.
+    if (kHueSums) r.acc[0].a = max(max(v.r, v.g), v.b);
+    else r.acc[0].rgb = v.rgb;
     r.tau.x = v.a;
     r.trans = exp(-r.tau.x);
     r.done = r.trans <= P.march.z;

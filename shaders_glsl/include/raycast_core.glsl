@@ -11,6 +11,9 @@
 //   vec4 vxr_transfer(int channel, float x);  transfer-function entry at x in 0..1:
 //                                         rgb the colour, a the opacity (extinction scale);
 //                                         vxr_transfer_index() below gives the two entries and weight
+//   with VXR_SC_HUE_TABLES, where each channel's colour is a hue (0 or 1 a component) times a value:
+//   vec2 vxr_transfer_value(int channel, float x);  that value and the opacity at x
+//   vec3 vxr_hue(int channel);
 //
 // Numerics (../shared/design/numerics.md): sample positions come from the step
 // index (never t += dt); opacity from accumulated optical depth, exp(-sum tau),
@@ -22,6 +25,8 @@
 
 vec4 vxr_sample(vec3 p);
 vec4 vxr_transfer(int channel, float x);
+vec2 vxr_transfer_value(int channel, float x);
+vec3 vxr_hue(int channel);
 
 // Where depth-coded colour is measured: the position in the volume's voxel
 // space (the box [0, dims] of P). The brick marcher samples in brick-local
@@ -46,6 +51,14 @@ layout(constant_id = 103) const bool VXR_SC_DEPTH_COLOR = false;  // depth.x != 
 layout(constant_id = 104) const bool VXR_SC_GAMMA = true;          // some window[c].z != 1
 layout(constant_id = 105) const bool VXR_SC_NAIVE_OPACITY = true;  // control2.z != 0
 layout(constant_id = 112) const uint VXR_SC_BLEND = VXR_BLEND_ADDITIVE;  // control2.x
+// Every channel's colours are one hue times a value (TransferTable::hue): the
+// includer's lookups read one texel (vxr_transfer_value), and additive E-A
+// sums each channel's light as that value alone, in acc[c].a (.rgb stays 0),
+// times the hue when the ray finishes or is packed: the same floats, since
+// the hue's components are 0 or 1, for a third of the compositing's work.
+layout(constant_id = 116) const bool VXR_SC_HUE_TABLES = false;
+const bool kHueSums = VXR_SC_HUE_TABLES && VXR_SC_MODEL == VXR_MODEL_EMISSION_ABSORPTION &&
+                      VXR_SC_BLEND == VXR_BLEND_ADDITIVE;
 
 // Table lookup with the interpolation done by the includer (two loads + mix),
 // so the CPU reference can repeat it exactly: entry i sits at x = i /
@@ -197,8 +210,16 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
   float mix_tau = 0.0;
   for (int c = 0; c < n; ++c) {
     if (P.window[c].w == 0.0) continue;
-    vec4 tf = vxr_transfer(c, x[c]);
-    vec3 color = depth_color ? vxr_transfer(c, dc).rgb : tf.rgb;
+    vec4 tf;
+    vec3 color;  // kHueSums: the colour's value in .x
+    if (kHueSums) {
+      const vec2 value_opacity = vxr_transfer_value(c, x[c]);
+      tf = vec4(0.0, 0.0, 0.0, value_opacity.y);
+      color = vec3(depth_color ? vxr_transfer_value(c, dc).x : value_opacity.x, 0.0, 0.0);
+    } else {
+      tf = vxr_transfer(c, x[c]);
+      color = depth_color ? vxr_transfer(c, dc).rgb : tf.rgb;
+    }
     float tau = tf.a * gfac[c] * density * seg;
     if (model == VXR_MODEL_EMISSION) {
       r.acc[c].rgb += color * tau;
@@ -212,7 +233,9 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
       // each brick, and the pixel's alpha comes from tau, not from it.
       const float trans = n == 1 ? r.trans : exp(-r.tau[c]);
       const float through = exp(-tau);
-      r.acc[c].rgb += trans * vxr_opacity(tau, through) * color;
+      const float light = trans * vxr_opacity(tau, through);
+      if (kHueSums) r.acc[c].a += light * color.x;
+      else r.acc[c].rgb += light * color;
       r.tau[c] += tau;
       if (n == 1) r.trans = trans * through;
     } else {
@@ -261,7 +284,7 @@ vec4 vxr_finish(VxrRay r, RaycastParams P, vec3 eye, vec3 dir) {
     vec3 rgb = vec3(0.0);
     float tau_sum = 0.0;
     for (int c = 0; c < n; ++c) {
-      rgb += r.acc[c].rgb;
+      rgb += kHueSums ? vxr_hue(c) * r.acc[c].a : r.acc[c].rgb;
       tau_sum += r.tau[c];
     }
     if (model == VXR_MODEL_EMISSION) return vec4(clamp(rgb, 0.0, 1.0), 0.0);
