@@ -130,7 +130,6 @@ layout(constant_id = 114) const bool VXR_SC_CLASSIFY = true;
 // (docs/skipping-perf.md, tenth round).
 layout(constant_id = 115) const uint VXR_SC_TEXEL_BYTES = 0u;
 
-
 // Brick b's record, read once per brick a ray enters.
 BrickRecord brick_record(uint b) {
   if (!VXR_SC_RECORD_TEXELS) return bricks[b];
@@ -246,8 +245,8 @@ vec3 vxr_hue(int channel) { return g_hue[channel]; }
 
 // VXR_SC_HUE_TABLES: one texel of the channel's hue row holds the value and
 // opacity of entries i and i + 1, where the table itself takes two (MRI E-A
-// at step 0.5 in gray: 47.1-48.9 ms against 49.0-51.4, docs/skipping-perf.md,
-// twentieth round).
+// at step 0.5 in gray: 47.1-55.0 ms against 49.1-57.5 over 5 rounds,
+// docs/skipping-perf.md, twentieth round).
 vec2 vxr_transfer_value(int channel, float x) {
   int i;
   float f;
