@@ -201,6 +201,7 @@ TEST_CASE("render: every volume in testdata renders to a non-blank image") {
     for (const auto& e : fs::directory_iterator(root / dir))
       if (e.is_regular_file()) inputs.push_back(e.path().string());
   std::sort(inputs.begin(), inputs.end());
+  const auto pipelines = std::make_shared<BrickPipelines>();  // a variant compiled once for all the inputs
   int rendered = 0;
   for (const std::string& in : inputs) {
     auto loaded = load_for_render(in, 2048, uint64_t(1) << 30);
@@ -219,7 +220,7 @@ TEST_CASE("render: every volume in testdata renders to a non-blank image") {
       s.channels.push_back(ch);
     }
     const VolumePlacement p{loaded->channels[0].dims, loaded->channels[0].voxel_size};
-    auto caster = MemoryVolumeRenderer::create(test::gpu_context(), loaded->channels);
+    auto caster = MemoryVolumeRenderer::create(test::gpu_context(), loaded->channels, 64, pipelines);
     REQUIRE_MESSAGE(caster.is_ok(), in << ": " << caster.status().to_string());
     const Camera cam = p.dims[2] == 1 ? orbit_camera(p, 0.0, 90.0 - 1e-3, 1.1) : orbit_camera(p, 30.0, 25.0, 1.25);
     auto img = (*caster)->render(cam, s, 48, 48);
