@@ -37,11 +37,8 @@ std::optional<glm::vec3> factor_hue(const glm::vec4* entries) {
   for (int i = 0; i < VXR_TF_SIZE; ++i)
     for (int k = 0; k < 3; ++k)
       if (entries[i][k] != 0.0f) hue[k] = 1.0f;
-  for (int i = 0; i < VXR_TF_SIZE; ++i) {
-    const glm::vec3 rgb(entries[i]);
-    const float s = hue.r != 0.0f ? rgb.r : hue.g != 0.0f ? rgb.g : rgb.b;
-    if (hue * s != rgb) return std::nullopt;
-  }
+  for (int i = 0; i < VXR_TF_SIZE; ++i)
+    if (hue * hue_value(hue, entries[i]) != glm::vec3(entries[i])) return std::nullopt;
   return hue;
 }
 

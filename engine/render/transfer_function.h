@@ -28,6 +28,11 @@ struct TransferTable {
   glm::dvec4 lookup(int channel, double x) const;
 };
 
+// The value s of a colour rgb = hue * s (TransferTable::hue): the component the hue keeps.
+inline float hue_value(const glm::vec3& hue, const glm::vec4& rgba) {
+  return hue.r != 0.0f ? rgba.r : hue.g != 0.0f ? rgba.g : rgba.b;
+}
+
 // Checks every setting against a volume of `channel_count` channels; the
 // message names the setting ("channels[1].window: lo 30 must be below hi 20").
 Status validate_render_settings(const RenderSettings& s, uint32_t channel_count);

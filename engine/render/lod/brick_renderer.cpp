@@ -493,9 +493,9 @@ Status BrickRenderer::record_transfer(VkCommandBuffer cmd, const TransferTable& 
     glm::vec4* pairs = rows + size_t(VXR_TF_HUE_ROWS + c) * VXR_TF_SIZE;
     const glm::vec4* entry = &table.rgba[size_t(c) * VXR_TF_SIZE];
     const std::optional<glm::vec3>& hue = table.hue[c];
-    const auto value = [&](int i) { return hue->r != 0.0f ? entry[i].r : hue->g != 0.0f ? entry[i].g : entry[i].b; };
     for (int i = 0; i + 1 < VXR_TF_SIZE; ++i)
-      pairs[i] = hue ? glm::vec4(value(i), entry[i].a, value(i + 1), entry[i + 1].a) : glm::vec4(0.0f);
+      pairs[i] = hue ? glm::vec4(hue_value(*hue, entry[i]), entry[i].a, hue_value(*hue, entry[i + 1]), entry[i + 1].a)
+                     : glm::vec4(0.0f);
     pairs[VXR_TF_SIZE - 1] = glm::vec4(hue.value_or(glm::vec3(0.0f)), 0.0f);
   }
   tf_hues_ = table.hue;
