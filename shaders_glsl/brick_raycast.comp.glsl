@@ -592,16 +592,6 @@ float unwarp(float q, float edge, float n, float stride) {
   return edge * stride + centre + (q - edge - centre) * stride;
 }
 
-// Entry j of a tile list, or the first after it, that some lane's 4x2
-// pixel block in `groups` marches (the entry's w, build_tile_lists): the
-// others' rays cannot meet the brick's kept cells. On lavapipe the block
-// is the SIMD group, so its rays skip the entry without a masked pass
-// through the brick's code.
-uint next_entry(uint j, uint last, uint groups) {
-  while (j < last && (items[j].w & groups) == 0u) ++j;
-  return j;
-}
-
 void main() {
   P = view_params;
   p = pass_params;
@@ -680,10 +670,7 @@ void main() {
   // once more, every lane masked, when the exit is tested first, since only a
   // loop's back edge branches (MRI E-A at step 1: 38.7 -> 35.7 ms, the same
   // samples and image).
-  // The ray's 4x2 block of the tile (bit of the tile entries' w), and those of its subgroup.
-  const uint group = 1u << (li >> 3u);
-  const uint subgroup_groups = tile_lists ? subgroupOr(group) : 0u;
-  uint j = tile_lists ? next_entry(first, last, subgroup_groups) : first;
+  uint j = first;
   if (!VXR_SC_NO_BRICKS && j < last && !ray.done) for (;;) {
     // Every active lane of a subgroup is at the same j (the list is its
     // workgroup's, and a ray that ends leaves the loop): the broadcast says
@@ -697,7 +684,7 @@ void main() {
       // The view depths where this tile's rays can meet the brick's kept cells (build_tile_lists).
       t0 = max(t0, uintBitsToFloat(entry.y) * ray_len);
       t1 = min(t1, uintBitsToFloat(entry.z) * ray_len);
-      hit = t1 > t0 && (entry.w & group) != 0u;
+      hit = t1 > t0;
     }
     if (hit) {
       // One-channel E-A carries its transparency as a product within a brick;
@@ -766,7 +753,7 @@ void main() {
         if (k >= n) break;
       }
     }
-    j = tile_lists ? next_entry(j + 1u, last, subgroup_groups) : j + 1u;
+    ++j;
     if (j >= last || ray.done) break;
   }
 

@@ -488,9 +488,8 @@ TEST_CASE("empty-space cells: the cell walk keeps the image for rays along the a
 
 TEST_CASE("empty-space cells: tile lists clipped to the depths of each brick's kept blocks keep the image") {
   // The tiled lists carry, per tile, the view depths where its rays can
-  // meet a walked brick's blocks of kept cells and which of its 4x2 pixel
-  // blocks have such rays, and leave the brick off tiles whose rays meet
-  // none (build_tile_lists). Against the same renderer without them: the same
+  // meet a walked brick's blocks of kept cells, and leave the brick off
+  // tiles whose rays meet none (build_tile_lists). Against the same renderer without them: the same
   // bytes, from fewer tile entries, for views from outside, along an axis,
   // from inside (blocks reaching behind the eye), with an ROI and a cut.
   test::GpuTestScope scope;
@@ -532,8 +531,7 @@ TEST_CASE("empty-space cells: tile lists clipped to the depths of each brick's k
       const ImageRgba8 c = converge(*budgeted, v.cam, s, f, 97, 97, &few);
       const std::string what = std::string(v.what) + " " + optical_model_name(model) + ": tile entries " +
                                std::to_string(on.tile_entries) + " (" + std::to_string(on.tile_blocks) +
-                               " blocks, " + std::to_string(on.group_entries) + " of their 4x2 blocks) vs " +
-                               std::to_string(off.tile_entries) + ", samples " +
+                               " blocks) vs " + std::to_string(off.tile_entries) + ", samples " +
                                std::to_string(on.samples) + " vs " + std::to_string(off.samples) +
                                "; budget of " + std::to_string(kFewBlocks) + ": " +
                                std::to_string(few.tile_entries) + " from " + std::to_string(few.tile_blocks);
@@ -543,10 +541,6 @@ TEST_CASE("empty-space cells: tile lists clipped to the depths of each brick's k
       CHECK(on.tile_blocks > 0);
       CHECK(off.tile_blocks == 0);
       CHECK(on.tile_entries < off.tile_entries);
-      // Each entry names the tile's 4x2 pixel blocks whose rays can meet the
-      // brick's blocks; the others skip it. Without blocks every ray marches.
-      CHECK(on.group_entries < 8 * on.tile_entries);
-      CHECK(off.group_entries == 8 * off.tile_entries);
       CHECK(c.pixels == b.pixels);
       CHECK(few.tile_blocks > 0);
       CHECK(few.tile_blocks <= kFewBlocks);

@@ -69,7 +69,6 @@ struct BrickFrameStats {
   uint32_t classify_passes = 0;  // of those, cell classifications (none where a view's inputs did not change)
   uint32_t bricks_walked = 0;    // drawn bricks whose rays walk empty-space cells (the others keep every cell)
   uint32_t tile_entries = 0;     // tiled frames: brick entries on the tile lists
-  uint32_t group_entries = 0;    // of those entries' 4x2 pixel blocks (8 each), the ones whose rays march the brick
   uint32_t tile_blocks = 0;      // of the walked bricks' kept-cell blocks, those projected for the tiles' depths
   uint32_t tiles_plain = 0;      // tiled frames: tiles whose bricks all march without a walk (a variant without cell code)
   uint32_t tiles_empty = 0;      // tiled frames: tiles no brick touches (the variant without a brick loop)

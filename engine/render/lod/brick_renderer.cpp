@@ -1,7 +1,6 @@
 #include "render/lod/brick_renderer.h"
 
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -136,12 +135,12 @@ std::string format_stats(const BrickFrameStats& s) {
   std::snprintf(buf, sizeof(buf),
                 "visited %llu drawn %llu (fallback %llu) empty %llu culled %llu missing %llu samples %llu "
                 "uploaded %u bricks %.2f MiB hit %.1f%% traverse %.2f ms render %.2f ms; cells walked in %u bricks; "
-                "tile entries %u (%u of their 4x2 blocks) from %u blocks, tiles without walks %u, without bricks %u%s",
+                "tile entries %u from %u blocks, tiles without walks %u, without bricks %u%s",
                 (unsigned long long)s.lod.visited, (unsigned long long)s.lod.drawn,
                 (unsigned long long)s.lod.fallback, (unsigned long long)s.lod.skipped_empty,
                 (unsigned long long)s.lod.culled, (unsigned long long)s.lod.missing, (unsigned long long)s.samples,
                 s.bricks_uploaded, double(s.bytes_uploaded) / (1 << 20), 100.0 * s.hit_rate, s.traverse_ms,
-                s.render_ms, s.bricks_walked, s.tile_entries, s.group_entries, s.tile_blocks, s.tiles_plain, s.tiles_empty,
+                s.render_ms, s.bricks_walked, s.tile_entries, s.tile_blocks, s.tiles_plain, s.tiles_empty,
                 s.hue_lookups ? "; colours from single-hue rows" : "");
   return buf;
 }
@@ -1091,16 +1090,14 @@ class TileFrusta {
   // `rays`: storage kept by the caller between views (two vectors a tile: the
   // centre ray's inverse per unit view depth, and how far the tile's rays
   // stray from it per world axis per unit view depth).
-  // `size`: the tiles' width and height in pixels (8x8 tiles, or the 4x2
-  // pixel blocks of their rays' SIMD groups).
-  TileFrusta(const LodView& v, const WarpAxis& ax, const WarpAxis& ay, glm::uvec2 size, std::vector<glm::dvec3>& rays)
-      : eye_(v.eye), columns_((ax.warped() + size.x - 1) / size.x), rays_(rays) {
-    const size_t rows = (ay.warped() + size.y - 1) / size.y;
+  TileFrusta(const LodView& v, const WarpAxis& ax, const WarpAxis& ay, std::vector<glm::dvec3>& rays)
+      : eye_(v.eye), columns_((ax.warped() + 7) / 8), rays_(rays) {
+    const size_t rows = (ay.warped() + 7) / 8;
     rays_.resize(2 * columns_ * rows);
     for (size_t ty = 0; ty < rows; ++ty) {
-      const glm::dvec2 y = ndc_span(ay, ty, size.y);
+      const glm::dvec2 y = ndc_span(ay, ty);
       for (size_t tx = 0; tx < columns_; ++tx) {
-        const glm::dvec2 x = ndc_span(ax, tx, size.x);
+        const glm::dvec2 x = ndc_span(ax, tx);
         // The centre ray per unit view depth (the shader's raw_dir); an axis
         // it does not move along gets a huge inverse, never 0 * inf.
         glm::dvec3 dir = v.forward + x.x * v.right - y.x * v.up;
@@ -1133,11 +1130,11 @@ class TileFrusta {
   }
 
  private:
-  // Tile t along an axis (`size` pixels a tile): the centre and half-extent in NDC of its pixel centres.
-  static glm::dvec2 ndc_span(const WarpAxis& a, size_t t, uint32_t size) {
+  // Tile t along an axis: the centre and half-extent in NDC of its pixel centres.
+  static glm::dvec2 ndc_span(const WarpAxis& a, size_t t) {
     const uint32_t n = a.warped();
     auto ndc = [&](size_t px) { return a.from_warped(px + 0.5) / a.full * 2.0 - 1.0; };  // monotonic in px
-    const double first = ndc(t * size), last = ndc(std::min<size_t>(t * size + size - 1, n - 1));
+    const double first = ndc(t * 8), last = ndc(std::min<size_t>(t * 8 + 7, n - 1));
     return {0.5 * (first + last), 0.5 * (last - first) + 1e-5};
   }
   glm::dvec3 eye_;
@@ -1244,18 +1241,14 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
                                        const LodView& view, const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst,
                                        size_t capacity, size_t* used, WorkSpans* spans) {
   const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
-  spans->blocks = spans->group_entries = 0;
+  spans->blocks = 0;
   // Scratch kept between views: no allocation per view once sizes settle.
   std::vector<std::vector<TileEntry>>& lists = tile_entries_;
   lists.resize(size_t(tw) * th);
   for (auto& l : lists) l.clear();
   std::vector<glm::dvec2>& depths = tile_depths_;
   const ScreenBoxes screen(view);
-  std::vector<uint8_t>& groups = tile_groups_;
-  // Built for the view's first brick with blocks: the tiles' rays, and their
-  // 4x2 blocks' (the shader's SIMD groups; next_entry in brick_raycast.comp).
-  std::optional<TileFrusta> frusta, group_frusta;
-  const uint32_t gw = (ax.warped() + 3) / 4, gh = (ay.warped() + 1) / 2;
+  std::optional<TileFrusta> frusta;  // built for the view's first brick with blocks
   size_t total = lists.size();
   const glm::vec2 all_depths(0.0f, std::numeric_limits<float>::infinity());
   for (uint32_t b = 0; b < boxes.size(); ++b) {
@@ -1268,50 +1261,36 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
     const uint32_t n_blocks = blocks[b].y - blocks[b].x;
     if (n_blocks == 0 || t0 == t1 || spans->blocks + n_blocks > opt_.max_tile_blocks) {
       for (uint32_t y = t0.y; y <= t1.y; ++y)
-        for (uint32_t x = t0.x; x <= t1.x; ++x) lists[size_t(y) * tw + x].push_back({b, all_depths, 0xffu});
+        for (uint32_t x = t0.x; x <= t1.x; ++x) lists[size_t(y) * tw + x].push_back({b, all_depths});
       continue;
     }
     spans->blocks += n_blocks;
     // Per tile of the brick's rectangle, the depths its blocks span there.
     const uint32_t rw = t1.x - t0.x + 1;
     depths.assign(size_t(rw) * (t1.y - t0.y + 1), glm::dvec2(1e300, -1e300));
-    groups.assign(depths.size(), 0);
     for (uint32_t i = blocks[b].x; i < blocks[b].y; ++i) {
       glm::dvec2 d;
       const glm::uvec4 q = warp_rect(screen.rect(block_boxes[i], &d), ax, ay);
       if (q.z == 0 || q.w == 0) continue;
       const glm::uvec2 q0 = glm::max(glm::uvec2(q.x, q.y) / 8u, t0);
       const glm::uvec2 q1 = glm::min((glm::uvec2(q.x + q.z, q.y + q.w) - 1u) / 8u, t1);
-      if (!frusta) {
-        frusta.emplace(view, ax, ay, glm::uvec2(8, 8), tile_rays_);
-        group_frusta.emplace(view, ax, ay, glm::uvec2(4, 2), group_rays_);
-      }
+      if (!frusta) frusta.emplace(view, ax, ay, tile_rays_);
       const TileFrusta::Box block = frusta->prepare(block_boxes[i], d);
       for (uint32_t y = q0.y; y <= q1.y; ++y)
         for (uint32_t x = q0.x; x <= q1.x; ++x) {
           const glm::dvec2 c = frusta->depths(x, y, block);
           if (!(c.x <= c.y)) continue;  // the tile's rays pass the block by
-          const size_t at = size_t(y - t0.y) * rw + (x - t0.x);
-          glm::dvec2& e = depths[at];
+          glm::dvec2& e = depths[size_t(y - t0.y) * rw + (x - t0.x)];
           e = glm::dvec2(std::min(e.x, c.x), std::max(e.y, c.y));
-          // Group g of the tile: pixels 4 (g & 1) .. +3 across, 2 (g >> 1) .. +1 down.
-          for (uint32_t g = 0; g < 8; ++g) {
-            const uint32_t gx = 2 * x + (g & 1), gy = 4 * y + (g >> 1);
-            if ((groups[at] >> g & 1u) || gx >= gw || gy >= gh) continue;
-            const glm::dvec2 cg = group_frusta->depths(gx, gy, block);
-            if (cg.x <= cg.y) groups[at] |= uint8_t(1u << g);
-          }
         }
     }
     for (uint32_t y = t0.y; y <= t1.y; ++y)
       for (uint32_t x = t0.x; x <= t1.x; ++x) {
-        const size_t at = size_t(y - t0.y) * rw + (x - t0.x);
-        const glm::dvec2 e = depths[at];
+        const glm::dvec2 e = depths[size_t(y - t0.y) * rw + (x - t0.x)];
         if (!(e.x <= e.y)) continue;  // no block here: its rays would find every cell empty
         // Widened well past float rounding of the rays' depths.
         const double margin = 1e-4 * e.y + 1e-3;
-        lists[size_t(y) * tw + x].push_back(
-            {b, glm::vec2(float(std::max(0.0, e.x - margin)), float(e.y + margin)), groups[at]});
+        lists[size_t(y) * tw + x].push_back({b, glm::vec2(float(std::max(0.0, e.x - margin)), float(e.y + margin))});
       }
   }
   for (const auto& l : lists) total += l.size();
@@ -1330,8 +1309,7 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
   for (size_t t = 0; t < lists.size(); ++t) {
     dst[t] = glm::uvec4(next, uint32_t(lists[t].size()), 0, 0);
     for (const TileEntry& e : lists[t]) {
-      dst[next++] = glm::uvec4(e.brick, glm::floatBitsToUint(e.depth.x), glm::floatBitsToUint(e.depth.y), e.groups);
-      spans->group_entries += std::popcount(e.groups);
+      dst[next++] = glm::uvec4(e.brick, glm::floatBitsToUint(e.depth.x), glm::floatBitsToUint(e.depth.y), 0);
       tile_kinds_[t] = walks[e.brick] ? uint8_t(kMarched) : std::min<uint8_t>(tile_kinds_[t], kPlain);
     }
   }
@@ -1554,7 +1532,6 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   }
   VXR_RETURN_IF_ERROR(built);
   st.tile_entries = spans.tile_entries;
-  st.group_entries = spans.group_entries;
   st.tile_blocks = spans.blocks;
   st.tiles_plain = spans.plain_tiles.y;
   st.tiles_empty = spans.empty_tiles.y;

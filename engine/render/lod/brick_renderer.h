@@ -410,7 +410,6 @@ class BrickRenderer final : public VolumeRenderer {
     std::vector<glm::uvec2> waves;
     glm::uvec2 marched_tiles{0, 0}, plain_tiles{0, 0}, empty_tiles{0, 0};
     uint32_t tile_entries = 0, blocks = 0;  // build_tile_lists: bricks on tiles, blocks projected
-    uint32_t group_entries = 0;             // build_tile_lists: of the entries' 8 groups each, those marching
   };
   // `model`: the packed parameters' VXR_MODEL_* (control.x). `records`:
   // where the view's brick records start in table_ (bytes, a multiple of
@@ -468,13 +467,10 @@ class BrickRenderer final : public VolumeRenderer {
   struct TileEntry {
     uint32_t brick;
     glm::vec2 depth;  // view depths its rays march there
-    uint32_t groups;  // bit g: the tile's 4x2 pixel block g has rays that can meet kept cells (VXR_TILE_GROUPS)
   };
   std::vector<std::vector<TileEntry>> tile_entries_;  // build_tile_lists' scratch: per tile, kept between views
   std::vector<glm::dvec2> tile_depths_;               // build_tile_lists' scratch: a brick's depths per tile
   std::vector<glm::dvec3> tile_rays_;                 // build_tile_lists' scratch: each tile's rays (TileFrusta)
-  std::vector<glm::dvec3> group_rays_;                // build_tile_lists' scratch: each 4x2 block's rays (TileFrusta)
-  std::vector<uint8_t> tile_groups_;                  // build_tile_lists' scratch: a brick's groups per tile
   std::vector<BrickBox> march_world_;  // record_view's scratch: per drawn brick, the world box its rays march
   std::vector<uint8_t> walks_;         // record_view's scratch: per drawn brick, whether it walks its cells
   std::vector<glm::uvec2> blocks_;     // record_view's scratch: per drawn brick, its span of block_world_
