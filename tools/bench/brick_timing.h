@@ -26,7 +26,8 @@ struct TimedFrames {
 // brick is resident (an error past 200 frames) and warmed up, then
 // `repeats` rounds that draw each once, so a busy machine's drift falls on
 // all of them alike and their ratios hold (skipping on against off); the
-// median wall and GPU time of each. `after_round`, if set, runs after each round.
+// median wall and GPU time of each. `after_round`, if set, runs after each
+// round, and an untimed frame of the first kind follows it.
 Result<std::vector<TimedFrames>> time_in_turn(BrickRenderer& r, const Camera& cam, const RenderSettings& s,
                                               const std::vector<BrickFrameSettings>& frames, uint32_t size,
                                               int repeats, const std::function<Status()>& after_round = {});
