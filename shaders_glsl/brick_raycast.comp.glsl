@@ -75,10 +75,10 @@ layout(std140, binding = 14) uniform CellBitsWindow { uvec4 cell_bits_window[VXR
 // brick_record).
 layout(binding = 15, rgba32f) uniform readonly imageBuffer record_texels;
 
-// Each atlas's texels as 16-bit elements (BrickPool texel views) for the
+// Each atlas's texel words (BrickPool write_texel_words, 32 bits) for the
 // rays' own trilinear filter (specialisation constant 115); without views,
 // and past the channel count, a stand-in that is never read.
-layout(binding = 17, r16ui) uniform readonly uimageBuffer atlas_texels[VXR_MAX_CHANNELS];
+layout(binding = 17, r32ui) uniform readonly uimageBuffer atlas_texels[VXR_MAX_CHANNELS];
 
 layout(push_constant) uniform Push { BrickCastParams pass_params; };
 // The two blocks' copies, made before main's first branch: in a branch or a
@@ -124,7 +124,7 @@ layout(constant_id = 113) const bool VXR_SC_WAVES = true;
 layout(constant_id = 114) const bool VXR_SC_CLASSIFY = true;
 
 // 0: the rays sample the atlases (binding 0). 1 or 2: the atlas texels'
-// bytes (R8 UNORM, stored in pairs, or R16 UNORM), and the rays filter their
+// bytes (R8 UNORM in quads, R16 UNORM in pairs), and the rays filter their
 // texel views (binding 17) by hand: on lavapipe each sampler call is a function call costing
 // several times the loads and arithmetic of the filter below
 // (docs/skipping-perf.md, tenth round).
@@ -159,18 +159,19 @@ float g_t_limit = 1.0 / 0.0;
 float g_probe = 0.0;
 
 // Where the sampler's linear filter with clamp-to-edge reads for atlas
-// texel coordinate `a` (texel centres at + 0.5): the 8 texels' indices in
-// the texel view (along rows, then slices) and the weights.
+// texel coordinate `a` (texel centres at + 0.5): the words (below) of its
+// low-x corners in the texel view (along rows, then slices), and the weights.
 struct AtlasCorners {
-  int t000, t100, t010, t110, t001, t101, t011, t111;
+  int t000, t010, t001, t011;
   vec3 f;
 };
 
 AtlasCorners atlas_corners(vec3 a) {
-  // Texel pairs (below) hold x and x + 1: left of the first texel centre the
-  // coordinate is clamped to it (weight 0 on the pair's second texel), which
-  // is what the clamped indices give.
-  if (VXR_SC_TEXEL_BYTES == 1u) a.x = max(a.x, 0.5);
+  // Texel words (below) hold x and x + 1 (u8: and the same of y + 1): left
+  // of the first texel centre the coordinate is clamped to it (weight 0 on
+  // the word's neighbours), which is what the clamped indices give.
+  if (VXR_SC_TEXEL_BYTES != 0u) a.x = max(a.x, 0.5);
+  if (VXR_SC_TEXEL_BYTES == 1u) a.y = max(a.y, 0.5);
   const vec3 lo = floor(a - 0.5);
   const ivec3 last = ivec3(p.texels.z & 0xffffu, p.texels.z >> 16u, p.texels.w);
   const ivec3 i0 = clamp(ivec3(lo), ivec3(0), last), i1 = clamp(ivec3(lo) + 1, ivec3(0), last);
@@ -178,31 +179,28 @@ AtlasCorners atlas_corners(vec3 a) {
   const int y0 = i0.y * row, y1 = i1.y * row, z0 = i0.z * slice, z1 = i1.z * slice;
   AtlasCorners k;
   k.t000 = z0 + y0 + i0.x;
-  k.t100 = z0 + y0 + i1.x;
   k.t010 = z0 + y1 + i0.x;
-  k.t110 = z0 + y1 + i1.x;
   k.t001 = z1 + y0 + i0.x;
-  k.t101 = z1 + y0 + i1.x;
   k.t011 = z1 + y1 + i0.x;
-  k.t111 = z1 + y1 + i1.x;
   k.f = a - 0.5 - lo;
   return k;
 }
 
-// Texel t of a u16 texel view IMG (a literal element of the binding: arrays
-// of texel buffers take constant indices only) as the integer it stores.
-#define VXR_TEXEL(IMG, t) float(imageLoad(IMG, t).r)
-// The filter over IMG at `k`: x first, then y, then z, as the sampler does.
-#define VXR_FILTERED(IMG, k)                                                                \
-  mix(mix(mix(VXR_TEXEL(IMG, k.t000), VXR_TEXEL(IMG, k.t100), k.f.x),                     \
-          mix(VXR_TEXEL(IMG, k.t010), VXR_TEXEL(IMG, k.t110), k.f.x), k.f.y),             \
-      mix(mix(VXR_TEXEL(IMG, k.t001), VXR_TEXEL(IMG, k.t101), k.f.x),                     \
-          mix(VXR_TEXEL(IMG, k.t011), VXR_TEXEL(IMG, k.t111), k.f.x), k.f.y),             \
-      k.f.z)
-// u8 texels in pairs (BrickPool texel_pairs): element t holds texel t (low
-// byte) and its +x neighbour (high byte), so a row of the filter is one
-// load: 4 loads a sample instead of 8 (`vxr bench roofline`: docs/skipping-perf.md, eleventh round).
-float vxr_pair_row(uint pair, float fx) { return mix(float(pair & 0xffu), float(pair >> 8u), fx); }
+// Texel words (BrickPool write_texel_words; IMG a literal element of the
+// binding: arrays of texel buffers take constant indices only), filtered
+// x first, then y, then z, as the sampler does. u8: word t holds texels
+// (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1) from its low byte, so a
+// sample is 2 loads; lavapipe loads a 32-bit element for 8 rays with one
+// gather, a 16-bit one lane by lane (MRI E-A at step 0.5: 47.5 ms against
+// 54.7 with 4 loads of u8 pairs, docs/skipping-perf.md, twenty-second round).
+float vxr_quad(uint q, vec2 f) {
+  return mix(mix(float(q & 0xffu), float((q >> 8u) & 0xffu), f.x),
+             mix(float((q >> 16u) & 0xffu), float(q >> 24u), f.x), f.y);
+}
+#define VXR_QUADS_FILTERED(IMG, k) \
+  mix(vxr_quad(imageLoad(IMG, k.t000).r, k.f.xy), vxr_quad(imageLoad(IMG, k.t001).r, k.f.xy), k.f.z)
+// u16: word t holds texel (x, y) and (x + 1, y) from its low half: a row of the filter is one load.
+float vxr_pair_row(uint pair, float fx) { return mix(float(pair & 0xffffu), float(pair >> 16u), fx); }
 #define VXR_PAIR_ROW(IMG, t, k) vxr_pair_row(imageLoad(IMG, t).r, k.f.x)
 #define VXR_PAIRS_FILTERED(IMG, k)                                                                   \
   mix(mix(VXR_PAIR_ROW(IMG, k.t000, k), VXR_PAIR_ROW(IMG, k.t010, k), k.f.y),                       \
@@ -223,9 +221,9 @@ vec4 vxr_sample(vec3 pos) {
     const AtlasCorners k = atlas_corners(g_atlas_origin + pos);
     vec4 v = vec4(0.0);
     if (b == 1u) {
-      VXR_EACH_CHANNEL(v, VXR_PAIRS_FILTERED, k)
+      VXR_EACH_CHANNEL(v, VXR_QUADS_FILTERED, k)
     } else {
-      VXR_EACH_CHANNEL(v, VXR_FILTERED, k)
+      VXR_EACH_CHANNEL(v, VXR_PAIRS_FILTERED, k)
     }
     return v * (b == 2u ? 1.0 / 65535.0 : 1.0 / 255.0);
   }

@@ -697,13 +697,19 @@ TEST_CASE("brick features: a slot filled from apron-1 chunks and their neighbour
   }
 }
 
-TEST_CASE("brick features: u8 atlases read by hand hold texel pairs, each slot row as (x, x + 1)") {
-  // The rays load a filter row (texel x and x + 1) as one 16-bit element
-  // (BrickPool texel_pairs); the row's last texel is paired with itself.
-  const uint8_t row[3] = {7, 9, 200};
-  uint8_t pairs[6];
-  write_texel_pairs(row, 3, pairs);
-  CHECK(std::vector<uint8_t>(pairs, pairs + 6) == std::vector<uint8_t>{7, 9, 9, 200, 200, 200});
+TEST_CASE("brick features: atlases read by hand hold a word per texel: u8 (x, y) quads, u16 (x) pairs") {
+  // The rays load a u8 texel with its +x, +y and +xy neighbours, or a u16
+  // texel with its +x neighbour, as one 32-bit word (BrickPool
+  // write_texel_words); past a slot's last texel of an axis the texel itself stands in.
+  const uint8_t row[3] = {7, 9, 200}, next[3] = {1, 2, 3};
+  uint8_t quads[12];
+  write_texel_words(VK_FORMAT_R8_UNORM, row, next, 3, quads);
+  CHECK(std::vector<uint8_t>(quads, quads + 12) == std::vector<uint8_t>{7, 9, 1, 2, 9, 200, 2, 3, 200, 200, 3, 3});
+  const uint16_t row16[2] = {700, 65535};
+  uint16_t pairs16[4];
+  write_texel_words(VK_FORMAT_R16_UNORM, reinterpret_cast<const uint8_t*>(row16), nullptr, 2,
+                    reinterpret_cast<uint8_t*>(pairs16));
+  CHECK(std::vector<uint16_t>(pairs16, pairs16 + 4) == std::vector<uint16_t>{700, 65535, 65535, 65535});
   test::GpuTestScope scope;
   auto src = mri(2);
   BrickPoolOptions o;
@@ -711,24 +717,25 @@ TEST_CASE("brick features: u8 atlases read by hand hold texel pairs, each slot r
   auto made = BrickPool::create(test::gpu_context(), *src, o);
   REQUIRE(made.is_ok());
   BrickPool& pool = **made;
-  // Texel views (and so pairs) on a CPU device only; GPUs sample.
-  CHECK(pool.pairs() == test::gpu_context().info().is_cpu());
-  if (!pool.pairs()) return;
+  // Texel views (and so words) on a CPU device only; GPUs sample.
+  CHECK(pool.texel_words() == test::gpu_context().info().is_cpu());
+  if (!pool.texel_words()) return;
   const uint32_t e = pool.slot_edge();
-  CHECK(pool.atlas().extent.width == 2 * 2 * e);
+  CHECK(pool.atlas().extent.width == 4 * 2 * e);
   const ChunkKey k{0, 5, 7, 1};
   REQUIRE(pool.upload({k}, 1 << 20).is_ok());
-  std::vector<uint8_t> texels(size_t(e) * e * e), want(2 * e);
+  std::vector<uint8_t> texels(size_t(e) * e * e), want(4 * e);
   REQUIRE(pool.fill_slot(k, texels.data()).is_ok());
   const glm::uvec3 at = pool.touch(k) - glm::uvec3(pool.apron());
   const gpu::Image& a = pool.atlas();
   for (uint32_t z : {0u, e / 2, e - 1})
-    for (uint32_t y : {0u, e - 1}) {
+    for (uint32_t y : {0u, e / 2, e - 1}) {
       CAPTURE(z);
       CAPTURE(y);
-      write_texel_pairs(&texels[(size_t(z) * e + y) * e], e, want.data());
-      const uint8_t* got = a.mapped + (at.z + z) * a.depth_pitch + (at.y + y) * a.row_pitch + size_t(at.x) * 2;
-      CHECK(std::vector<uint8_t>(got, got + 2 * e) == want);
+      const uint8_t* from = &texels[(size_t(z) * e + y) * e];
+      write_texel_words(VK_FORMAT_R8_UNORM, from, y + 1 < e ? from + e : from, e, want.data());
+      const uint8_t* got = a.mapped + (at.z + z) * a.depth_pitch + (at.y + y) * a.row_pitch + size_t(at.x) * 4;
+      CHECK(std::vector<uint8_t>(got, got + 4 * e) == want);
     }
 }
 
@@ -826,11 +833,11 @@ TEST_CASE("brick features: a timepoint > 0 draws that timepoint's data (golden)"
   CHECK(bad.status().message().find("timepoint 7") != std::string::npos);
 }
 
-TEST_CASE("brick features: u8 slots whose paired atlas outgrows one texel view with the driver's row padding sample "
-          "their texels instead") {
-  // 1 x 18 x 18 slots of 68^3: 204 MB of paired texels fit lavapipe's 256 MiB
-  // view, its rows padded to 192 bytes (288 MB) do not. The pool keeps the
-  // texels unpaired and the rays sample them: the image is the sampler's.
+TEST_CASE("brick features: u8 slots whose atlas of texel words outgrows one texel view with the driver's row "
+          "padding sample their texels instead") {
+  // 1 x 20 x 20 slots of 68^3: 503 MB of texel quads fit lavapipe's 512 MiB
+  // view, its rows padded to 320 bytes (592 MB) do not. The pool keeps the
+  // texels as they are and the rays sample them: the image is the sampler's.
   test::GpuTestScope scope;
   auto src = imported_as("mri64", 64, 2, [] { return std::make_unique<MemorySlabSource>(test::mri()); });
   const RenderSettings s = test::mri_settings(OpticalModel::kEmissionAbsorption, "gray");
@@ -838,13 +845,13 @@ TEST_CASE("brick features: u8 slots whose paired atlas outgrows one texel view w
   ImageRgba8 img[2];
   for (int views = 0; views < 2; ++views) {
     BrickRendererOptions o;
-    o.pool.slots = {1, 18, 18};
+    o.pool.slots = {1, 20, 20};
     o.pool.texel_views = views == 1;
     auto r = BrickRenderer::create(test::gpu_context(), *src, o);
     REQUIRE_MESSAGE(r.is_ok(), r.status().to_string());
     CAPTURE(views);
-    if (test::gpu_context().info().is_cpu()) CHECK_FALSE((*r)->pool().pairs());
-    if ((*r)->pool().pairs()) return;  // a driver whose padded rows fit: nothing to fall back from
+    if (test::gpu_context().info().is_cpu()) CHECK_FALSE((*r)->pool().texel_words());
+    if ((*r)->pool().texel_words()) return;  // a driver whose padded rows fit: nothing to fall back from
     img[views] = converge(**r, cam, s, {}, 96, 80);
   }
   CHECK(test::looks_non_blank(img[0]));

@@ -188,7 +188,7 @@ TEST_CASE("brick render: the rays' own filter over texel views matches the sampl
   auto sampled = renderer(*src, o);
   if (test::gpu_context().info().type == VK_PHYSICAL_DEVICE_TYPE_CPU) {
     CHECK(hand->pool().atlas_texels_view() != nullptr);
-    CHECK(hand->pool().pairs());  // u8: texel pairs, 4 loads a sample
+    CHECK(hand->pool().texel_words());  // u8: texel quads, 2 loads a sample
   }
   CHECK(sampled->pool().atlas_texels_view() == nullptr);
   const Camera cam = orbit_camera(hand->placement(), 30, 25, 1.25);

@@ -22,10 +22,21 @@ VkFormat brick_texel_format(DType dtype) {
   }
 }
 
-void write_texel_pairs(const uint8_t* row, uint32_t n, uint8_t* out) {
-  for (uint32_t x = 0; x < n; ++x) {
-    out[2 * x] = row[x];
-    out[2 * x + 1] = row[x + 1 < n ? x + 1 : x];
+void write_texel_words(VkFormat texel_format, const uint8_t* row, const uint8_t* next_row, uint32_t n, uint8_t* out) {
+  if (texel_word_width(texel_format) == 4) {
+    for (uint32_t x = 0; x < n; ++x) {
+      const uint32_t x1 = x + 1 < n ? x + 1 : x;
+      out[4 * x] = row[x];
+      out[4 * x + 1] = row[x1];
+      out[4 * x + 2] = next_row[x];
+      out[4 * x + 3] = next_row[x1];
+    }
+    return;
+  }
+  for (uint32_t x = 0; x < n; ++x) {  // u16: the texel's two bytes, then its +x neighbour's
+    const uint32_t x1 = x + 1 < n ? x + 1 : x;
+    std::memcpy(out + 4 * x, row + 2 * x, 2);
+    std::memcpy(out + 4 * x + 2, row + 2 * x1, 2);
   }
 }
 
@@ -187,14 +198,14 @@ void compute_cell_ranges(VkFormat format, const uint8_t* texels, uint32_t chunk_
 }
 
 Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_bytes, uint32_t max_dim,
-                             uint64_t max_bytes) {
+                             uint64_t max_bytes, uint32_t wide_x) {
   const uint64_t brick_bytes = uint64_t(edge) * edge * edge * texel_bytes;
-  if (edge > max_dim || brick_bytes > max_bytes)
+  if (uint64_t(edge) * wide_x > max_dim || brick_bytes > max_bytes)
     return out_of_range("brick pool: one brick of " + std::to_string(edge) + "^3 texels does not fit the device (" +
                         std::to_string(max_dim) + " texels a side, " + std::to_string(max_bytes >> 20) +
                         " MiB); import with a smaller --chunk");
   glm::uvec3 s;
-  for (int a = 0; a < 3; ++a) s[a] = std::max(1u, std::min(wanted[a], max_dim / edge));
+  for (int a = 0; a < 3; ++a) s[a] = std::max(1u, std::min(wanted[a], max_dim / (edge * (a == 0 ? wide_x : 1))));
   // Shrink the longest axis until the atlas fits the heap; at least one slot always fits (checked above).
   while (uint64_t(s.x) * s.y * s.z * brick_bytes > max_bytes) {
     const int a = s.x >= s.y && s.x >= s.z ? 0 : (s.y >= s.z ? 1 : 2);
@@ -239,10 +250,10 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   p->channel_bytes_ = uint64_t(p->edge_) * p->edge_ * p->edge_ * p->texel_bytes_;
   p->brick_bytes_ = p->channel_bytes_ * nch;
   // Texel views (see above): a CPU device with direct writes.
-  const bool want_views = options.texel_views && options.direct_writes && p->texel_bytes_ <= 2 &&
+  const bool want_views = options.texel_views && options.direct_writes && texel_word_width(format) != 0 &&
                           ctx.info().is_cpu();
-  // Texel pairs take twice the bytes (and width) per atlas texel.
-  const uint32_t stored = want_views && texel_pairs(format) ? 2 : 1;
+  // Texel words take texel_word_width times the bytes (and width) per atlas texel.
+  const uint32_t stored = want_views ? texel_word_width(format) : 1;
   const uint64_t view_bytes =
       uint64_t(ctx.limits().maxTexelBufferElements) * gpu::format_texel_bytes(kAtlasTexelElement);
   if (auto_slots) {
@@ -260,19 +271,19 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   }
   // Lowered further to fit the device, so containers with wide chunks (up to 512 + apron) still draw.
   VXR_ASSIGN_OR_RETURN(slots, fit_slots(slots, p->edge_, p->texel_bytes_ * nch * stored,
-                                        ctx.limits().maxImageDimension3D / stored, kMaxAtlasBytes));
+                                        ctx.limits().maxImageDimension3D, kMaxAtlasBytes, stored));
   p->slots_ = slots;
   const uint64_t ext[3] = {uint64_t(slots.x) * p->edge_, uint64_t(slots.y) * p->edge_, uint64_t(slots.z) * p->edge_};
   // The ring must hold at least one brick, however wide the container's chunks are.
   const uint64_t staging_bytes = std::max(options.staging_bytes, p->brick_bytes_);
   const VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  // Pairs where each atlas fits one view and the wide image maps; else the texels as they are.
-  const VkExtent3D paired{uint32_t(ext[0] * 2), uint32_t(ext[1]), uint32_t(ext[2])};
-  p->pairs_ = stored == 2 && ext[0] * ext[1] * ext[2] * 2 <= view_bytes &&
-              gpu::host_mapped_image_supported(ctx, VK_IMAGE_TYPE_3D, format, usage, paired);
+  // Words where each atlas fits one view and the wide image maps; else the texels as they are.
+  const VkExtent3D wide{uint32_t(ext[0] * stored), uint32_t(ext[1]), uint32_t(ext[2])};
+  p->words_ = stored > 1 && ext[0] * ext[1] * ext[2] * p->texel_bytes_ * stored <= view_bytes &&
+              gpu::host_mapped_image_supported(ctx, VK_IMAGE_TYPE_3D, format, usage, wide);
   VkExtent3D extent{};
   const auto make_atlases = [&]() -> Status {
-    extent = p->pairs_ ? paired : VkExtent3D{uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])};
+    extent = p->words_ ? wide : VkExtent3D{uint32_t(ext[0]), uint32_t(ext[1]), uint32_t(ext[2])};
     p->direct_ =
         options.direct_writes && gpu::host_mapped_image_supported(ctx, VK_IMAGE_TYPE_3D, format, usage, extent);
     p->atlases_.clear();
@@ -285,11 +296,11 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
     return Status::ok();
   };
   VXR_RETURN_IF_ERROR(make_atlases());
-  // The driver may pad the rows: pairs only where the padded atlas fits one
+  // The driver may pad the rows: words only where the padded atlas fits one
   // view as well (a u8 grid of 1 x 18 x 18 slots of 68^3 on lavapipe: 204 MB
   // of texels in 288 MB of rows); otherwise the texels as they are.
-  if (p->pairs_ && p->atlases_[0].depth_pitch * extent.depth > view_bytes) {
-    p->pairs_ = false;
+  if (p->words_ && p->atlases_[0].depth_pitch * extent.depth > view_bytes) {
+    p->words_ = false;
     VXR_RETURN_IF_ERROR(make_atlases());
   }
   if (p->direct_) {
@@ -308,11 +319,11 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
     p->scratch_.resize(p->brick_bytes_);
     // All atlases or none: the rays read every channel the same way.
     for (const gpu::Image& atlas : p->atlases_) {
-      if (!want_views || (texel_pairs(format) && !p->pairs_)) break;  // u8 texels are read by hand in pairs only
+      if (!want_views || !p->words_) break;  // texels are read by hand as words only
       Result<gpu::ImageTexels> w = gpu::create_image_texels(ctx, atlas, kAtlasTexelElement);
       if (!w.is_ok()) {
         // Pairs are only read through views; a sampler would read them as texels.
-        if (p->pairs_) return internal_error("brick pool: texel pairs without a view: " + w.status().message());
+        if (p->words_) return internal_error("brick pool: texel words without a view: " + w.status().message());
         p->texel_views_.clear();
         break;
       }
@@ -598,13 +609,13 @@ void BrickPool::write_slot(uint32_t c, uint32_t slot, const uint8_t* texels) {
   // frames that drew it, so nothing on the device reads these texels now.
   const gpu::Image& atlas = atlases_[c];
   const glm::uvec3 o = slot_origin(slot) - glm::uvec3(apron_);
-  const size_t row = size_t(edge_) * texel_bytes_, stored = pairs_ ? 2 : 1;
+  const size_t row = size_t(edge_) * texel_bytes_, stored = words_ ? texel_word_width(atlas.format) : 1;
   for (uint32_t z = 0; z < edge_; ++z)
     for (uint32_t y = 0; y < edge_; ++y) {
       uint8_t* to = atlas.mapped + (o.z + z) * atlas.depth_pitch + (o.y + y) * atlas.row_pitch +
                     size_t(o.x) * texel_bytes_ * stored;
       const uint8_t* from = texels + (size_t(z) * edge_ + y) * row;
-      if (pairs_) write_texel_pairs(from, edge_, to);
+      if (words_) write_texel_words(atlas.format, from, y + 1 < edge_ ? from + row : from, edge_, to);
       else std::memcpy(to, from, row);
     }
 }

@@ -42,10 +42,11 @@
 // those by hand instead of calling the sampler, which on lavapipe costs
 // several times a trilinear filter written in the shader
 // (docs/skipping-perf.md, tenth round). The automatic slot grid then keeps
-// each atlas within one view (maxTexelBufferElements elements). A u8 atlas
-// read that way holds texel pairs (write_texel_pairs): twice as wide, so
-// one element is a texel and its +x neighbour, and a filter row is one load
-// (eleventh round).
+// each atlas within one view (maxTexelBufferElements elements). An atlas
+// read that way holds one 32-bit word per texel (write_texel_words): a u8
+// texel with its +x, +y and +xy neighbours (four times as wide), so a
+// trilinear sample is two loads; a u16 texel with its +x neighbour (twice
+// as wide), four loads (eleventh and twenty-second rounds).
 #pragma once
 
 #include <functional>
@@ -86,26 +87,34 @@ struct BrickPoolOptions {
 };
 
 
-// The texel views' element: 16 bits, which lavapipe loads lane by lane
-// (32-bit elements take a gather instruction, slower on the machines
-// measured): a u16 texel, or a pair of u8 texels (texel_pairs).
-constexpr VkFormat kAtlasTexelElement = VK_FORMAT_R16_UINT;
+// The texel views' element: one 32-bit word per atlas texel, which lavapipe
+// loads for 8 rays with one gather instruction; a 16-bit element is loaded
+// lane by lane (MRI E-A at step 0.5: 47.5 ms against 54.7 with u8 pairs,
+// docs/skipping-perf.md, twenty-second round).
+constexpr VkFormat kAtlasTexelElement = VK_FORMAT_R32_UINT;
 
-// u8 texels read by hand are stored in pairs: element x of a row (16 bits,
-// little-endian) holds texel x and texel x + 1, the row's last texel twice.
-// The image keeps its R8_UNORM format at twice the width, and is never sampled.
-inline bool texel_pairs(VkFormat texel_format) { return texel_format == VK_FORMAT_R8_UNORM; }
-// `n` u8 texels of a row -> 2n bytes of pairs.
-void write_texel_pairs(const uint8_t* row, uint32_t n, uint8_t* out);
+// Texels read by hand are stored as words: a u8 texel's word holds, from
+// its low byte, texels (x, y), (x + 1, y), (x, y + 1) and (x + 1, y + 1) of
+// its slot; a u16 texel's, from its low half, (x, y) and (x + 1, y). Past a
+// slot's last texel of an axis the texel itself stands in. The image keeps
+// its format at texel_word_width times the width, and is never sampled.
+// 0: the format is not read by hand.
+inline uint32_t texel_word_width(VkFormat texel_format) {
+  return texel_format == VK_FORMAT_R8_UNORM ? 4u : texel_format == VK_FORMAT_R16_UNORM ? 2u : 0u;
+}
+// `n` texels of a row and of the next row (the row itself for a slot's
+// last) -> n words (texel_word_width(texel_format) texels each).
+void write_texel_words(VkFormat texel_format, const uint8_t* row, const uint8_t* next_row, uint32_t n, uint8_t* out);
 
 // Largest set of atlases create() makes: lavapipe has one 2 GiB heap; leave room for the rest.
 constexpr uint64_t kMaxAtlasBytes = (1ull << 31) - (64ull << 20);
 
 // `wanted` slots per axis lowered until every side fits max_dim texels and the
-// atlases fit max_bytes (texel_bytes: all channels of one texel). kOutOfRange
-// when not even one brick fits.
+// atlases fit max_bytes (texel_bytes: all channels of one stored texel; a
+// slot's x side is edge * wide_x of them: texel words). kOutOfRange when not
+// even one brick fits.
 Result<glm::uvec3> fit_slots(glm::uvec3 wanted, uint32_t edge, uint32_t texel_bytes, uint32_t max_dim,
-                             uint64_t max_bytes);
+                             uint64_t max_bytes, uint32_t wide_x = 1);
 
 // The atlas texel format for a dtype (see above) and data units per texel
 // unit: 255 (u8, UNORM), 65535 (u16, UNORM), 1 (float texels).
@@ -196,8 +205,8 @@ class BrickPool {
   Status fill_slot(const ChunkKey& key, uint8_t* out) const;
   uint32_t slot_edge() const { return edge_; }
   uint32_t texel_bytes() const { return texel_bytes_; }
-  // The atlases hold texel pairs (texel_pairs; only with texel views).
-  bool pairs() const { return pairs_; }
+  // The atlases hold texel words (write_texel_words; only with texel views).
+  bool texel_words() const { return words_; }
 
   const gpu::Image& atlas(uint32_t channel = 0) const { return atlases_[channel]; }
   // The layout the atlases are sampled in (GENERAL with direct writes).
@@ -270,7 +279,7 @@ class BrickPool {
   glm::uvec3 slots_{0};
   uint32_t edge_ = 0, apron_ = 0;
   uint32_t texel_bytes_ = 1;
-  bool pairs_ = false;
+  bool words_ = false;
   uint64_t channel_bytes_ = 0;  // one brick, one channel
   uint64_t brick_bytes_ = 0;
   std::vector<gpu::Image> atlases_;

@@ -634,9 +634,9 @@ BrickRenderer::AtlasReads BrickRenderer::reads_of(const gpu::Image& a, bool by_h
   AtlasReads r;
   r.texels = {a.extent.width, a.extent.height, a.extent.depth};
   if (by_hand) {
-    // 1: u8 texels in pairs (texel_pairs: the image is twice as wide), 2: u16.
+    // 1: u8 texels in quads, 2: u16 in pairs (write_texel_words: the image is wider).
     r.texel_bytes = gpu::format_texel_bytes(a.format);
-    if (texel_pairs(a.format)) r.texels.x /= 2;
+    r.texels.x /= texel_word_width(a.format);
     const uint32_t element = gpu::format_texel_bytes(kAtlasTexelElement);  // pitches in view elements
     r.pitch = {uint32_t(a.row_pitch / element), uint32_t(a.depth_pitch / element)};
   }
@@ -1723,19 +1723,19 @@ Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
   const uint32_t cs = src_.chunk_size(), a = src_.apron(), e = cs + 2 * a;
   std::vector<gpu::Image> textures;
   std::vector<gpu::ImageTexels> views;
-  const VkExtent3D plain{uint32_t(nx), uint32_t(ny), uint32_t(nz)}, paired{uint32_t(nx) * 2, plain.height, plain.depth};
+  const uint32_t word_width = texel_word_width(format);
+  const VkExtent3D plain{uint32_t(nx), uint32_t(ny), uint32_t(nz)},
+      wide{uint32_t(nx) * std::max(word_width, 1u), plain.height, plain.depth};
   const VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  // Read as the pool's atlases are (by hand through texel views, u8 in
-  // pairs, or sampled), so both paths agree; sampled where that does not fit.
+  // Read as the pool's atlases are (by hand through texel views of texel
+  // words, or sampled), so both paths agree; sampled where that does not fit.
   const bool by_hand = pool_->atlas_texels_view() != nullptr;
-  // Every channel's texture and, read by hand, its view; false where pairs
-  // get no view (the driver's padded rows outgrow one).
-  const auto build = [&](bool pairs) -> Result<bool> {
+  // Every channel's texture and, read by hand, its view; false where the
+  // words get no view (the driver's padded rows outgrow one).
+  const auto build = [&](bool words) -> Result<bool> {
     views.clear();  // before the textures whose memory they view
     textures.clear();
-    const bool host_mapped = pairs || (by_hand && tb == 2 && gpu::host_mapped_image_supported(
-                                                                    ctx_, VK_IMAGE_TYPE_3D, format, usage, plain));
-    const VkExtent3D extent = pairs ? paired : plain;
+    const VkExtent3D extent = words ? wide : plain;
     for (uint32_t c = 0; c < channels(); ++c) {
       std::vector<uint8_t> dense(nx * ny * nz * sb);  // native voxels, then converted like the pool's
       for (uint32_t cz = 0; cz < li.chunk_counts[2]; ++cz)
@@ -1752,29 +1752,33 @@ Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
           }
       std::vector<uint8_t> texels(nx * ny * nz * tb);
       convert_to_texels(dtype, dense.data(), nx * ny * nz, texels.data());
-      if (pairs) {
-        std::vector<uint8_t> rows(texels.size() * 2);
-        for (uint64_t r = 0; r < ny * nz; ++r) write_texel_pairs(&texels[r * nx], uint32_t(nx), &rows[r * nx * 2]);
+      if (words) {
+        const uint64_t row = nx * tb;
+        std::vector<uint8_t> rows(texels.size() * word_width);
+        for (uint64_t r = 0; r < ny * nz; ++r) {
+          const uint8_t* from = &texels[r * row];
+          write_texel_words(format, from, (r + 1) % ny != 0 ? from + row : from, uint32_t(nx), &rows[r * row * word_width]);
+        }
         texels = std::move(rows);
       }
       gpu::ImageCreateInfo ii{VK_IMAGE_TYPE_3D, format, extent, usage, "monolithic volume"};
-      ii.host_mapped = host_mapped;
+      ii.host_mapped = words;
       VXR_ASSIGN_OR_RETURN(gpu::Image tex, gpu::create_image(ctx_, ii));
       VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, tex, texels.data(), texels.size()));
-      if (host_mapped) {
+      if (words) {
         Result<gpu::ImageTexels> view = gpu::create_image_texels(ctx_, tex, kAtlasTexelElement);
-        if (view.is_ok()) views.push_back(std::move(*view));
-        // Pairs are only read through views; a sampler would read them as texels.
-        else if (pairs) return false;
+        // Words are only read through views; a sampler would read them as texels.
+        if (!view.is_ok()) return false;
+        views.push_back(std::move(*view));
       }
       textures.push_back(std::move(tex));
     }
     return true;
   };
-  const bool pairs = by_hand && pool_->pairs() && paired.width <= max3d &&
-                     gpu::host_mapped_image_supported(ctx_, VK_IMAGE_TYPE_3D, format, usage, paired);
+  const bool words = by_hand && pool_->texel_words() && wide.width <= max3d &&
+                     gpu::host_mapped_image_supported(ctx_, VK_IMAGE_TYPE_3D, format, usage, wide);
   bool built = false;
-  VXR_ASSIGN_OR_RETURN(built, build(pairs));
+  VXR_ASSIGN_OR_RETURN(built, build(words));
   if (!built) {
     VXR_ASSIGN_OR_RETURN(built, build(false));  // the texels as they are, sampled
   }

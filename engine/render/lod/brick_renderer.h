@@ -311,7 +311,7 @@ class BrickRenderer final : public VolumeRenderer {
   // What the rays need to read them (record_cast).
   struct AtlasReads {
     glm::uvec3 texels{0};      // the atlas's size in texels (a paired atlas's image is twice as wide)
-    uint32_t texel_bytes = 0;  // hand filtering (constant 115): 1 (u8 in pairs) or 2 (u16); 0: the sampler
+    uint32_t texel_bytes = 0;  // hand filtering (constant 115): 1 (u8 quads) or 2 (u16 pairs); 0: the sampler
     glm::uvec2 pitch{0};       // row and slice pitch in view elements (hand filtering)
   };
   // Of atlas `a` (channel 0's; the others share its layout), read by hand through texel views or sampled.
