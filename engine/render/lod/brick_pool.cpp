@@ -297,9 +297,12 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   };
   VXR_RETURN_IF_ERROR(make_atlases());
   // The driver may pad the rows: words only where the padded atlas fits one
-  // view as well (a u8 grid of 1 x 18 x 18 slots of 68^3 on lavapipe: 204 MB
-  // of texels in 288 MB of rows); otherwise the texels as they are.
-  if (p->words_ && p->atlases_[0].depth_pitch * extent.depth > view_bytes) {
+  // view as well (a u8 grid of 1 x 20 x 20 slots of 68^3 on lavapipe: 503 MB
+  // of words in 592 MB of rows) and its pitches are whole words (the rays
+  // index words); otherwise the texels as they are.
+  const gpu::Image& first = p->atlases_[0];
+  if (p->words_ && (first.depth_pitch * extent.depth > view_bytes || first.row_pitch % 4 != 0 ||
+                    first.depth_pitch % 4 != 0)) {
     p->words_ = false;
     VXR_RETURN_IF_ERROR(make_atlases());
   }

@@ -1766,8 +1766,10 @@ Status BrickRenderer::set_monolithic(uint32_t level, uint32_t timepoint) {
       VXR_ASSIGN_OR_RETURN(gpu::Image tex, gpu::create_image(ctx_, ii));
       VXR_RETURN_IF_ERROR(gpu::upload_image(ctx_, tex, texels.data(), texels.size()));
       if (words) {
+        // Words are only read through views, whose pitches are whole words;
+        // a sampler would read them as texels.
+        if (tex.row_pitch % 4 != 0 || tex.depth_pitch % 4 != 0) return false;
         Result<gpu::ImageTexels> view = gpu::create_image_texels(ctx_, tex, kAtlasTexelElement);
-        // Words are only read through views; a sampler would read them as texels.
         if (!view.is_ok()) return false;
         views.push_back(std::move(*view));
       }
