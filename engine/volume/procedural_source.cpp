@@ -267,6 +267,10 @@ Result<ChunkStats> ProceduralSource::stats(const ChunkKey& key) const {
   const LevelInfo& li = levels_[key.level];
   if (key.x >= li.chunk_counts[0] || key.y >= li.chunk_counts[1] || key.z >= li.chunk_counts[2])
     return not_found("procedural volume: chunk outside level " + std::to_string(key.level));
+  {
+    std::lock_guard<std::mutex> lock(stats_mu_);
+    if (auto it = stats_cache_.find(key); it != stats_cache_.end()) return it->second;
+  }
   const Box box = payload_box(key);
   Segment widest{{0, 0, 0}, {0, 0, 0}, max_sigma_, 1.0};
   double sig, amp;
@@ -288,6 +292,9 @@ Result<ChunkStats> ProceduralSource::stats(const ChunkKey& key) const {
   st.min = std::floor(255.0 * tmin);
   st.max = std::min(255.0, double(opt_.noise_max) + std::ceil(255.0 * tmax));
   if (st.min > st.max) st.min = st.max;
+  std::lock_guard<std::mutex> lock(stats_mu_);
+  if (stats_cache_.size() >= kStatsCacheEntries) stats_cache_.clear();
+  stats_cache_.emplace(key, st);
   return st;
 }
 

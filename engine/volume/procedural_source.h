@@ -24,6 +24,8 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <mutex>
+#include <unordered_map>
 #include <vector>
 
 #include "volume/chunk_source.h"
@@ -94,6 +96,12 @@ class ProceduralSource final : public ChunkSource {
   std::vector<std::vector<uint32_t>> grid_;  // kGrid^3 cells of segment ids (by AABB)
   std::array<double, 3> extent_{1, 1, 1};    // normalised size of the volume
   double occupancy_ = 0.0;
+  // stats() answered before: the LOD traversal asks for every visited chunk
+  // each frame, and each answer bounds every nearby segment (a 256^3 view at
+  // 512x512: most of the main thread's time a frame). Bounded: cleared when full.
+  static constexpr size_t kStatsCacheEntries = size_t(1) << 16;
+  mutable std::mutex stats_mu_;
+  mutable std::unordered_map<ChunkKey, ChunkStats, ChunkKeyHash> stats_cache_;
 };
 
 }  // namespace vxr
