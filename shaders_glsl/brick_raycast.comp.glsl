@@ -21,6 +21,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_vote : require
 
 #include "shared/brick_params.h"
 #include "shared/raycast_params.h"
@@ -380,6 +381,8 @@ float cell_key(uint slot, int cell, int c) {
 }
 
 const bool kReduceModel = VXR_SC_MODEL == VXR_MODEL_MIP || VXR_SC_MODEL == VXR_MODEL_MINIP;
+// The brick loop searches the list for an entry with a run (see main).
+const bool kHeadSearch = VXR_SC_CELLS && !kReduceModel;
 
 uint cell_count() { return p.pass.y * p.pass.y * p.pass.y; }
 uint cell_words() { return (cell_count() + 31u) / 32u; }
@@ -670,86 +673,112 @@ void main() {
   // samples and image).
   uint j = first;
   if (!VXR_SC_NO_BRICKS && j < last && !ray.done) for (;;) {
-    // Every active lane of a subgroup is at the same j (the list is its
-    // workgroup's, and a ray that ends leaves the loop): the broadcast says
-    // so, for compilers that then load the record once per subgroup (GPUs'
-    // scalar loads; lavapipe still gathers, see brick_record).
-    const uvec4 entry = tile_lists ? items[j] : uvec4(j, 0u, 0u, 0u);
-    const uint b = subgroupBroadcastFirst(entry.x);
-    const BrickRecord br = brick_record(b);
-    bool hit = item_mode || segment(br, dir, t0, t1);
-    if (hit && tile_lists) {
-      // The view depths where this tile's rays can meet the brick's kept cells (build_tile_lists).
-      t0 = max(t0, uintBitsToFloat(entry.y) * ray_len);
-      t1 = min(t1, uintBitsToFloat(entry.z) * ray_len);
-      hit = t1 > t0;
-    }
-    if (hit) {
-      // One-channel E-A carries its transparency as a product within a brick;
-      // each brick starts it again from the optical depth, as a multipass
-      // wave's ray does (unpack_ray), so every dispatch mode gives one image.
-      if (VXR_SC_CHANNELS == 1 && VXR_SC_MODEL == VXR_MODEL_EMISSION_ABSORPTION) ray.trans = exp(-ray.tau.x);
-      const vec3 e = br.eye.xyz;
-      g_atlas_origin = br.atlas.xyz;
-      const vec3 dl = dir * br.scale.xyz;
-      const float dt = P.march.x / length(dl);  // one local step, in t units
-      const float i0 = ceil(t0 / dt - offset);
-      const int n = int(ceil(t1 / dt - offset) - i0);
-      // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture),
-      // unless no cell of its box is empty (box_lo.w): then a walk finds nothing.
-      const bool cells = VXR_SC_CELLS && p.pass.y != 0u && br.atlas.w >= 0.0 && br.box_lo.w == 0.0;
-      const uint cell_base = !cells ? 0u
-                             : kReduceModel ? uint(br.atlas.w) * uint(VXR_SC_CHANNELS) * cell_count()
-                                            : b * cell_words();
-      // The walk in sample indices: sample k of this brick is at e + (k + i0 + offset) * step.
-      const vec3 inv_step = 1.0 / (dl * dt);
-      // Runs: a ray marches samples [k, run_end) without a test; where a run
-      // ends, it jumps the empty cells ahead and finds the next run's end by
-      // walking the occupied cells (cell tests only, in a CellWalk). The rays of a SIMD group
-      // (lavapipe runs 8 in lockstep) then pay for a walk only where one of
-      // them ends a run, not on nearly every sample as when each sample tested
-      // its own cell. MIP / MinIP runs are one cell: their test depends on the
-      // running value.
-      const bool group_runs = cells;  // see the run loop below
-      int k = 0, run_end = cells ? 0 : n;
-      // The first walk before the loop, each next one after a run: a brick's
-      // last walk, which finds no run, then ends the loop without a masked
-      // pass through the run's samples. `cells` first: without constant 106
-      // the walks compile out (lavapipe runs an if's code even where no lane
-      // takes it).
-      if (cells) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, cell_base, n, ray);
-      if (k < n) for (;;) {
-        // A run's samples in a loop of their own, with no run-end test inside:
-        // on lavapipe the MRI's E-A frame took 190 -> 170 ms with skipping, 330
-        // -> 270 without (`vxr bench peer`). With cells, a lane whose run ends
-        // first keeps taking its samples while another lane's run goes on,
-        // instead of waiting masked: the iteration is paid anyway, a sample in
-        // an empty cell changes nothing (nor one that cannot pass a MIP /
-        // MinIP running value: the value only moves away from it), and the
-        // lane's next walk starts further on (MRI E-A at step 0.5: SIMD
-        // iterations 2.10M -> 1.88M for 7% more samples taken; MRI MIP at step
-        // 0.75: 62.4 ms against 72.7, 5% more samples). The group's iterations are counted
-        // once, by the longest run left: a vote each sample (until no lane is in
-        // its run) costs lavapipe a loop over the lanes. A lane that ends or
-        // leaves the brick drops out; the others go on.
-        const int left = k < run_end && !ray.done ? run_end - k : 0;
-        const int iterations = group_runs ? subgroupMax(left) : left;
-        const int stop = k + min(iterations, n - k);
-        if (iterations > 0) for (;;) {
-          // From the index: no drift. The segment is dt level-0 voxels long.
-          const float t = (i0 + float(k) + offset) * dt;
-          if (VXR_SC_SAMPLE_WORK == VXR_SAMPLE_SHADE) vxr_step(ray, P, e, dl, t, dt);
-          else g_probe += VXR_SC_SAMPLE_WORK == VXR_SAMPLE_FETCH_ONLY ? vxr_sample(e + t * dl).x : t;
-          ++taken;
-          // The crossing's normal needs its brick's voxels: shade it now.
-          if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
-          ++k;
-          if (k >= stop || ray.done) break;
-        }
-        if (k >= n || ray.done) break;
-        if (cells && k >= run_end) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, cell_base, n, ray);
-        if (k >= n) break;
+    // The brick's head: its record, the ray's segment and, with cells, the
+    // first walk. Samples k .. n - 1 of the brick are left to march; a lane
+    // that misses the brick has none.
+    vec3 e = vec3(0.0), dl = vec3(0.0), inv_step = vec3(0.0);
+    float dt = 1.0, i0 = 0.0;
+    int n = 0, k = 0, run_end = 0;
+    bool cells = false;
+    uint cell_base = 0u;
+    // E-A with cells: the heads of the list's entries in a loop of their
+    // own, which moves on while no lane's first walk finds a run. lavapipe
+    // runs a loop's body once even with no lane active, so an entry no lane
+    // samples would otherwise cost its SIMD group a masked pass through the
+    // runs and walks below (sparse volumes: most of a tile's entries for
+    // most of its groups). A loop's back edge is the only branch lavapipe
+    // takes (`vxr bench roofline`, vessels E-A: 0.46-0.49 of the ceiling
+    // against 0.42-0.43; MRI E-A unchanged: docs/skipping-perf.md,
+    // twenty-second round). Not for MIP / MinIP, whose one-cell runs are found on nearly
+    // every entry (the MRI's MIP frame took 33 ms against 29 with it:
+    // docs/skipping-perf.md, eighteenth round).
+    for (;;) {
+      // Every active lane of a subgroup is at the same j (the list is its
+      // workgroup's, and a ray that ends leaves the loop): the broadcast says
+      // so, for compilers that then load the record once per subgroup (GPUs'
+      // scalar loads; lavapipe still gathers, see brick_record).
+      const uvec4 entry = tile_lists ? items[j] : uvec4(j, 0u, 0u, 0u);
+      const uint b = subgroupBroadcastFirst(entry.x);
+      const BrickRecord br = brick_record(b);
+      bool hit = item_mode || segment(br, dir, t0, t1);
+      if (hit && tile_lists) {
+        // The view depths where this tile's rays can meet the brick's kept cells (build_tile_lists).
+        t0 = max(t0, uintBitsToFloat(entry.y) * ray_len);
+        t1 = min(t1, uintBitsToFloat(entry.z) * ray_len);
+        hit = t1 > t0;
       }
+      n = 0;
+      k = 0;
+      if (hit) {
+        // One-channel E-A carries its transparency as a product within a brick;
+        // each brick starts it again from the optical depth, as a multipass
+        // wave's ray does (unpack_ray), so every dispatch mode gives one image.
+        if (VXR_SC_CHANNELS == 1 && VXR_SC_MODEL == VXR_MODEL_EMISSION_ABSORPTION) ray.trans = exp(-ray.tau.x);
+        e = br.eye.xyz;
+        g_atlas_origin = br.atlas.xyz;
+        dl = dir * br.scale.xyz;
+        dt = P.march.x / length(dl);  // one local step, in t units
+        i0 = ceil(t0 / dt - offset);
+        n = int(ceil(t1 / dt - offset) - i0);
+        // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture),
+        // unless no cell of its box is empty (box_lo.w): then a walk finds nothing.
+        cells = VXR_SC_CELLS && p.pass.y != 0u && br.atlas.w >= 0.0 && br.box_lo.w == 0.0;
+        cell_base = !cells ? 0u
+                    : kReduceModel ? uint(br.atlas.w) * uint(VXR_SC_CHANNELS) * cell_count()
+                                   : b * cell_words();
+        // The walk in sample indices: sample k of this brick is at e + (k + i0 + offset) * step.
+        inv_step = 1.0 / (dl * dt);
+        // Runs: a ray marches samples [k, run_end) without a test; where a run
+        // ends, it jumps the empty cells ahead and finds the next run's end by
+        // walking the occupied cells (cell tests only, in a CellWalk). The rays of a SIMD group
+        // (lavapipe runs 8 in lockstep) then pay for a walk only where one of
+        // them ends a run, not on nearly every sample as when each sample tested
+        // its own cell. MIP / MinIP runs are one cell: their test depends on the
+        // running value.
+        run_end = cells ? 0 : n;
+        // The first walk before the loop, each next one after a run: a brick's
+        // last walk, which finds no run, then ends the loop without a masked
+        // pass through the run's samples. `cells` first: without constant 106
+        // the walks compile out (lavapipe runs an if's code even where no lane
+        // takes it).
+        if (cells) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, cell_base, n, ray);
+      }
+      if (!kHeadSearch || subgroupAny(k < n)) break;
+      ++j;
+      if (j >= last) break;
+    }
+    const bool group_runs = cells;  // see the run loop below
+    if (k < n) for (;;) {
+      // A run's samples in a loop of their own, with no run-end test inside:
+      // on lavapipe the MRI's E-A frame took 190 -> 170 ms with skipping, 330
+      // -> 270 without (`vxr bench peer`). With cells, a lane whose run ends
+      // first keeps taking its samples while another lane's run goes on,
+      // instead of waiting masked: the iteration is paid anyway, a sample in
+      // an empty cell changes nothing (nor one that cannot pass a MIP /
+      // MinIP running value: the value only moves away from it), and the
+      // lane's next walk starts further on (MRI E-A at step 0.5: SIMD
+      // iterations 2.10M -> 1.88M for 7% more samples taken; MRI MIP at step
+      // 0.75: 62.4 ms against 72.7, 5% more samples). The group's iterations are counted
+      // once, by the longest run left: a vote each sample (until no lane is in
+      // its run) costs lavapipe a loop over the lanes. A lane that ends or
+      // leaves the brick drops out; the others go on.
+      const int left = k < run_end && !ray.done ? run_end - k : 0;
+      const int iterations = group_runs ? subgroupMax(left) : left;
+      const int stop = k + min(iterations, n - k);
+      if (iterations > 0) for (;;) {
+        // From the index: no drift. The segment is dt level-0 voxels long.
+        const float t = (i0 + float(k) + offset) * dt;
+        if (VXR_SC_SAMPLE_WORK == VXR_SAMPLE_SHADE) vxr_step(ray, P, e, dl, t, dt);
+        else g_probe += VXR_SC_SAMPLE_WORK == VXR_SAMPLE_FETCH_ONLY ? vxr_sample(e + t * dl).x : t;
+        ++taken;
+        // The crossing's normal needs its brick's voxels: shade it now.
+        if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
+        ++k;
+        if (k >= stop || ray.done) break;
+      }
+      if (k >= n || ray.done) break;
+      if (cells && k >= run_end) walk_to_run(k, run_end, e, dl, i0, offset, dt, inv_step, cell_base, n, ray);
+      if (k >= n) break;
     }
     ++j;
     if (j >= last || ray.done) break;
