@@ -192,8 +192,9 @@ AtlasCorners atlas_corners(vec3 a) {
 // x first, then y, then z, as the sampler does. u8: word t holds texels
 // (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1) from its low byte, so a
 // sample is 2 loads; lavapipe loads a 32-bit element for 8 rays with one
-// gather, a 16-bit one lane by lane (MRI E-A at step 0.5: 47.5 ms against
-// 54.7 with 4 loads of u8 pairs, docs/skipping-perf.md, twenty-second round).
+// gather, a 16-bit one lane by lane (MRI MIP at step 0.5: 34.7-36.8 ms
+// against 43.7-47.2 with 4 loads of u8 pairs, docs/skipping-perf.md,
+// twenty-second round).
 float vxr_quad(uint q, vec2 f) {
   return mix(mix(float(q & 0xffu), float((q >> 8u) & 0xffu), f.x),
              mix(float((q >> 16u) & 0xffu), float(q >> 24u), f.x), f.y);

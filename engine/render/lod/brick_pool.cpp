@@ -325,7 +325,7 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
       if (!want_views || !p->words_) break;  // texels are read by hand as words only
       Result<gpu::ImageTexels> w = gpu::create_image_texels(ctx, atlas, kAtlasTexelElement);
       if (!w.is_ok()) {
-        // Pairs are only read through views; a sampler would read them as texels.
+        // Words are only read through views; a sampler would read them as texels.
         if (p->words_) return internal_error("brick pool: texel words without a view: " + w.status().message());
         p->texel_views_.clear();
         break;

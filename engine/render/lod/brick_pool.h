@@ -89,8 +89,8 @@ struct BrickPoolOptions {
 
 // The texel views' element: one 32-bit word per atlas texel, which lavapipe
 // loads for 8 rays with one gather instruction; a 16-bit element is loaded
-// lane by lane (MRI E-A at step 0.5: 47.5 ms against 54.7 with u8 pairs,
-// docs/skipping-perf.md, twenty-second round).
+// lane by lane (MRI MIP at step 0.5: 34.7-36.8 ms against 43.7-47.2 with u8
+// pairs, docs/skipping-perf.md, twenty-second round).
 constexpr VkFormat kAtlasTexelElement = VK_FORMAT_R32_UINT;
 
 // Texels read by hand are stored as words: a u8 texel's word holds, from

@@ -310,7 +310,7 @@ class BrickRenderer final : public VolumeRenderer {
   Atlases mono_atlases() const;  // set_monolithic's
   // What the rays need to read them (record_cast).
   struct AtlasReads {
-    glm::uvec3 texels{0};      // the atlas's size in texels (a paired atlas's image is twice as wide)
+    glm::uvec3 texels{0};      // the atlas's size in texels (an atlas of texel words is wider)
     uint32_t texel_bytes = 0;  // hand filtering (constant 115): 1 (u8 quads) or 2 (u16 pairs); 0: the sampler
     glm::uvec2 pitch{0};       // row and slice pitch in view elements (hand filtering)
   };
