@@ -686,13 +686,13 @@ void main() {
     // own, which moves on while no lane's first walk finds a run. lavapipe
     // runs a loop's body once even with no lane active, so an entry no lane
     // samples would otherwise cost its SIMD group a masked pass through the
-    // runs and walks below (sparse volumes: most of a tile's entries for
-    // most of its groups). A loop's back edge is the only branch lavapipe
-    // takes (`vxr bench roofline`, vessels E-A: 0.46-0.49 of the ceiling
-    // against 0.42-0.43; MRI E-A unchanged: docs/skipping-perf.md,
-    // twenty-second round). Not for MIP / MinIP, whose one-cell runs are found on nearly
-    // every entry (the MRI's MIP frame took 33 ms against 29 with it:
-    // docs/skipping-perf.md, eighteenth round).
+    // runs and walks below (the sparse vessels: about a third of the SIMD
+    // groups' entries, docs/skipping-perf.md, twenty-first round). A loop's
+    // back edge is the only branch lavapipe takes (`vxr bench roofline`,
+    // vessels E-A: 0.46-0.49 of the ceiling against 0.42-0.43; MRI E-A
+    // unchanged: twenty-second round). Not for MIP / MinIP, whose one-cell
+    // runs are found on nearly every entry (the MRI's MIP frame took 33 ms
+    // against 29 with it: eighteenth round).
     for (;;) {
       // Every active lane of a subgroup is at the same j (the list is its
       // workgroup's, and a ray that ends leaves the loop): the broadcast says

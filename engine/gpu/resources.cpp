@@ -20,7 +20,7 @@ namespace {
 // apart) is read at random by rays, which with 4 KiB pages miss the TLB on
 // nearly every brick. Transparent huge pages where the kernel offers them
 // on request; the pages are touched later by the host's writes (sparse
-// vessels at step 0.5: 2.8-2.9 ms a frame against 3.1-3.5,
+// vessels at step 0.5: 2.76-2.84 ms a frame against 2.95-3.13,
 // docs/skipping-perf.md, twenty-second round). A hint: nothing changes where it is refused.
 void advise_huge_pages(void* base, VkDeviceSize bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
@@ -35,7 +35,6 @@ void advise_huge_pages(void* base, VkDeviceSize bytes) {
 }
 
 }  // namespace
-
 
 Result<Buffer> create_buffer(const Context& ctx, const BufferCreateInfo& info) {
   if (info.size == 0) return invalid_argument(std::string(info.debug_name) + ": buffer size is 0");
