@@ -1,5 +1,6 @@
 # Runs a vxr command line and checks its exit code and output.
-#   -DVXR=path -DARGS="arg|arg|..." -DEXPECT_RC=0 [-DEXPECT_STDOUT=regex] [-DEXPECT_STDERR=regex] [-DEXPECT_FILE=path]
+#   -DVXR=path -DARGS="arg|arg|..." -DEXPECT_RC=0 [-DEXPECT_STDOUT=regex] [-DEXPECT_STDERR=regex]
+#   [-DEXPECT_FILE="path|path|..."]  (files that must exist afterwards)
 #   [-DEXPECT_NO_FILE=path]  (a file that must not exist afterwards)
 #   [-DEXPECT_JSON=path -DJSON_CHECKS="key OP value|..."]  (OP: EQUAL, LESS_EQUAL, GREATER_EQUAL; value a
 #    number or @other_key; numbers compare numerically, so 0.0 EQUAL 0)
@@ -16,8 +17,13 @@ endif()
 if(DEFINED EXPECT_STDERR AND NOT err MATCHES "${EXPECT_STDERR}")
   message(FATAL_ERROR "stderr does not match '${EXPECT_STDERR}'")
 endif()
-if(DEFINED EXPECT_FILE AND NOT EXISTS "${EXPECT_FILE}")
-  message(FATAL_ERROR "expected file ${EXPECT_FILE} was not written")
+if(DEFINED EXPECT_FILE)
+  string(REPLACE "|" ";" files "${EXPECT_FILE}")
+  foreach(f IN LISTS files)
+    if(NOT EXISTS "${f}")
+      message(FATAL_ERROR "expected file ${f} was not written")
+    endif()
+  endforeach()
 endif()
 if(DEFINED EXPECT_NO_FILE AND EXISTS "${EXPECT_NO_FILE}")
   message(FATAL_ERROR "file ${EXPECT_NO_FILE} must not exist, but it does")

@@ -19,7 +19,11 @@
 // --export-scenes the level-0 voxels and the reference image go beside it,
 // so another tool can draw the same scenes and be scored against the same
 // reference (tools/peer/vtk_peer.py, run by ci/peer-vtk.sh).
+//
+// Beside the report, peer.png plots each scene's time against its error,
+// skipping on and off, with the RMSE goal.
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -30,6 +34,8 @@
 #include "assets/assets.h"
 #include "bench.h"
 #include "bench/brick_timing.h"
+#include "bench/plot.h"
+#include "core/image.h"
 #include "core/output_file.h"
 #include "core/progress.h"
 #include "render/lod/brick_renderer.h"
@@ -135,6 +141,48 @@ Result<nlohmann::json> export_scene(const std::string& dir, const Scene& sc, con
   return nlohmann::json{{"volume", volume}, {"reference_rgba", reference}};
 }
 
+// Time (wall ms) against error per scene, skipping on as a line and off as
+// lighter points, and the RMSE goal across: the speed-vs-error front the
+// report lists, and what skipping buys at each error.
+PlotSpec peer_plot(const nlohmann::json& scenes, double rmse_goal, uint32_t size) {
+  PlotSpec plot;
+  plot.title = "vxr bench peer: time vs error, " + std::to_string(size) + "x" + std::to_string(size);
+  plot.x_label = "wall ms per frame";
+  plot.y_label = "RMSE vs the CPU reference (8-bit units)";
+  plot.log_x = plot.log_y = true;
+  const std::array<uint8_t, 3> colours[] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44}, {148, 103, 189}};
+  double lo = 1e300, hi = 0.0;
+  for (size_t i = 0; i < scenes.size(); ++i) {
+    const std::array<uint8_t, 3> c = colours[i % 4];
+    PlotSeries on, off;
+    on.label = scenes[i]["scene"].get<std::string>() + ", skipping on";
+    on.color = c;
+    on.line = true;
+    off.label = scenes[i]["scene"].get<std::string>() + ", skipping off";
+    // The same hue, halfway to white.
+    off.color = {uint8_t((c[0] + 255) / 2), uint8_t((c[1] + 255) / 2), uint8_t((c[2] + 255) / 2)};
+    for (const nlohmann::json& row : scenes[i]["steps"]) {
+      const double err = row["rmse_vs_reference"], on_ms = row["on"]["wall_ms"], off_ms = row["off"]["wall_ms"];
+      on.x.push_back(on_ms), on.y.push_back(err);
+      off.x.push_back(off_ms), off.y.push_back(err);
+      lo = std::min({lo, on_ms, off_ms}), hi = std::max({hi, on_ms, off_ms});
+    }
+    plot.series.push_back(std::move(on));
+    plot.series.push_back(std::move(off));
+  }
+  if (hi > 0.0) {
+    PlotSeries goal;
+    goal.label = "RMSE goal";
+    goal.color = {0, 0, 0};
+    goal.line = true;
+    goal.markers = false;
+    goal.x = {lo, hi};
+    goal.y = {rmse_goal, rmse_goal};
+    plot.series.push_back(std::move(goal));
+  }
+  return plot;
+}
+
 int run(const Options& o) {
   auto gpu = open_gpu();
   if (!gpu) return fail(gpu.status());
@@ -222,6 +270,12 @@ int run(const Options& o) {
       std::printf("%-18s no step reached rmse <= %.2f\n", sc.name.c_str(), o.rmse_goal);
   }
   progress.finish();
+  std::error_code ec;
+  std::filesystem::create_directories(o.common.out_dir, ec);
+  const std::string png_path = (std::filesystem::path(o.common.out_dir) / "peer.png").string();
+  if (Status s = write_png(png_path, render_plot(peer_plot(per_scene, o.rmse_goal, o.size))); !s) return fail(s);
+  std::printf("%s\n", png_path.c_str());
+  doc["plot"] = png_path;
   doc["scenes"] = per_scene;
   doc["units"] = {{"time", "median wall ms of one converged frame (traversal, submit, ray cast, readback); gpu_ms from "
                             "timestamps around the frame's commands"},
