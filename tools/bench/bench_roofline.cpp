@@ -6,12 +6,16 @@
 // Its share is taken against the ceiling kernel timed in turn with its
 // frames (the calibration printed first is only the device's figure).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 
 #include "assets/assets.h"
 #include "bench.h"
+#include "bench/plot.h"
+#include "core/image.h"
 #include "render/camera.h"
 #include "render/lod/brick_renderer.h"
 #include "render/volume_session.h"
@@ -66,6 +70,51 @@ Result<std::vector<Scene>> scenes() {
   vs.density = 0.3;
   out.push_back({"vessels 256^3 ea", std::shared_ptr<ChunkSource>(std::move(vessels)), vs});
   return out;
+}
+
+// Each scene's share of the trilinear ceiling (the frame, and its fetch-only
+// probe where it has one) at x = its number, and the ceiling across.
+PlotSpec roofline_plot(const nlohmann::json& rows, uint32_t size) {
+  PlotSpec plot;
+  plot.title = "vxr bench roofline: share of the ceiling, " + std::to_string(size) + "x" + std::to_string(size);
+  plot.x_label = "scene (legend)";
+  plot.y_label = "samples/s over the ceiling's, timed in turn";
+  const std::array<uint8_t, 3> colours[] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44}, {148, 103, 189},
+                                            {255, 127, 14}, {140, 86, 75}};
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const std::array<uint8_t, 3> c = colours[i % 6];
+    const double x = double(i + 1), ceiling = rows[i]["ceiling_samples_per_s"];
+    PlotSeries frame;
+    frame.label = std::to_string(i + 1) + ": " + rows[i]["scene"].get<std::string>();
+    frame.color = c;
+    frame.marker_radius = 5;
+    frame.x = {x};
+    frame.y = {rows[i]["roofline_ratio"].get<double>()};
+    plot.series.push_back(std::move(frame));
+    if (rows[i].contains("fetch_only")) {
+      PlotSeries fetch;
+      fetch.label = std::to_string(i + 1) + ": fetch only";
+      fetch.color = {uint8_t((c[0] + 255) / 2), uint8_t((c[1] + 255) / 2), uint8_t((c[2] + 255) / 2)};
+      fetch.x = {x};
+      fetch.y = {rows[i]["fetch_only"]["samples_per_s"].get<double>() / ceiling};
+      plot.series.push_back(std::move(fetch));
+    }
+  }
+  PlotSeries top;
+  top.label = "the ceiling";
+  top.color = {0, 0, 0};
+  top.line = true;
+  top.markers = false;
+  top.x = {0.5, double(rows.size()) + 0.5};
+  top.y = {1.0, 1.0};
+  plot.series.push_back(std::move(top));
+  // A zero on the axis: shares read as heights.
+  PlotSeries floor;
+  floor.markers = false;
+  floor.x = {0.5};
+  floor.y = {0.0};
+  plot.series.push_back(std::move(floor));
+  return plot;
 }
 
 // The frame and, for E-A scenes, its probes (the fetch alone, then neither):
@@ -191,6 +240,12 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
                       "ceiling_samples_per_s, the trilinear kernel timed in turn with the scene's frames"},
             {"scenes", rows}}},
       };
+      std::error_code ec;
+      std::filesystem::create_directories(opt->out_dir, ec);
+      const std::string png_path = (std::filesystem::path(opt->out_dir) / "roofline.png").string();
+      if (Status s = write_png(png_path, render_plot(roofline_plot(rows, *size))); !s) return cli::fail(s);
+      std::printf("%s\n", png_path.c_str());
+      doc["plot"] = png_path;
       auto path = write_report(*opt, "roofline", doc, &ctx);
       return path ? cli::kExitOk : cli::fail(path.status());
     };
