@@ -3,7 +3,7 @@
 # installs deps (VTK's Python bindings too), builds, runs
 # `vxr bench peer --export-scenes`, then tools/peer/vtk_peer.py under Xvfb.
 # Extra arguments go to vtk_peer.py (e.g. --mappers fixed gpu).
-# Reports: out/peer/peer.json (vxr), out/peer/vtk-peer.json (VTK beside vxr).
+# Reports: out/peer/peer.json and peer.png (vxr), out/peer/vtk-peer.json and vtk-peer.png (VTK beside vxr).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"

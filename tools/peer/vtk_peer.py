@@ -10,6 +10,8 @@ setting, vxr's fastest step at least as accurate, and the speed ratio.
 
 Run by ci/peer-vtk.sh (which installs python3-vtk9 and runs it under Xvfb):
   vtk_peer.py out/peer/peer.json [--distances 2 1 0.5] [--mappers fixed gpu]
+Writes vtk-peer.json and vtk-peer.png (both fronts, time against error, with
+VTK's own charts) beside the report.
 
 The scene is matched to vxr's, not left at VTK's defaults:
 - geometry: vxr samples voxel centres (i + 0.5) * voxel_size with clamp to
@@ -197,6 +199,63 @@ def fastest_within(front, err):
     return min(ok, key=lambda p: p[1]) if ok else None
 
 
+# Colours per scene (vxr's line, VTK's points in the same hue, lighter per mapper).
+SCENE_COLOURS = [(31, 119, 180), (214, 39, 40), (44, 160, 44), (148, 103, 189)]
+
+
+def plot_fronts(path, doc):
+    """Each scene's vxr front (skipping on) as a line and VTK's points, wall ms
+    against RMSE on log axes: the PNG beside the JSON report."""
+    view = vtk.vtkContextView()
+    view.GetRenderWindow().SetOffScreenRendering(1)
+    view.GetRenderWindow().SetSize(900, 620)
+    view.GetRenderer().SetBackground(1, 1, 1)
+    chart = vtk.vtkChartXY()
+    view.GetScene().AddItem(chart)
+    chart.SetTitle("vxr beside VTK: time against error (lower left is better)")
+    chart.SetShowLegend(True)
+
+    def add(label, points, colour, line):
+        table = vtk.vtkTable()
+        xs, ys = vtk.vtkFloatArray(), vtk.vtkFloatArray()
+        xs.SetName("wall ms")
+        ys.SetName(label)
+        for x, y in points:  # in the report's order: vxr's line runs along its steps
+            xs.InsertNextValue(x)
+            ys.InsertNextValue(y)
+        table.AddColumn(xs)
+        table.AddColumn(ys)
+        plot = chart.AddPlot(vtk.vtkChart.LINE if line else vtk.vtkChart.POINTS)
+        plot.SetInputData(table, 0, 1)
+        plot.SetColor(*colour, 255)
+        plot.SetWidth(2.0)
+
+    for i, scene in enumerate(doc["scenes"]):
+        c = SCENE_COLOURS[i % len(SCENE_COLOURS)]
+        # Log axes: a point at RMSE 0 (an exact match) cannot be drawn.
+        add(f"{scene['scene']}: vxr", [(p["wall_ms"], p["rmse_vs_reference"]) for p in scene["vxr"]
+                                       if p["rmse_vs_reference"] > 0], c, True)
+        for k, kind in enumerate(sorted({r["mapper"] for r in scene["vtk"]})):
+            light = tuple(int(v + (255 - v) * (0.35 + 0.25 * k)) for v in c)
+            add(f"{scene['scene']}: VTK {kind}", [(r["wall_ms"], r["rmse_vs_reference"]) for r in scene["vtk"]
+                                                  if r["mapper"] == kind and r["rmse_vs_reference"] > 0], light, False)
+    for axis, title in ((vtk.vtkAxis.BOTTOM, "wall ms per frame"), (vtk.vtkAxis.LEFT, "RMSE vs the CPU reference (8-bit units)")):
+        chart.GetAxis(axis).SetLogScale(True)
+        chart.GetAxis(axis).SetTitle(title)
+    view.GetRenderWindow().Render()
+    grab = vtk.vtkWindowToImageFilter()
+    grab.SetInput(view.GetRenderWindow())
+    grab.Update()
+    tmp = path + ".tmp.png"
+    writer = vtk.vtkPNGWriter()
+    writer.SetFileName(tmp)
+    writer.SetInputConnection(grab.GetOutputPort())
+    writer.Write()
+    if writer.GetErrorCode():
+        fail(f"{path}: cannot write the plot (VTK error {writer.GetErrorCode()})")
+    os.replace(tmp, path)  # never a half-written plot
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("report", help="peer.json written by `vxr bench peer --export-scenes`")
@@ -274,10 +333,14 @@ def main():
                 ren.RemoveVolume(vol)
         doc["scenes"].append({"scene": scene["scene"], "vtk": rows,
                               "vxr": [{"step_voxels": s, "wall_ms": t, "rmse_vs_reference": e} for s, t, e in front]})
+    plot_path = os.path.splitext(out_path)[0] + ".png"
+    plot_fronts(plot_path, doc)
+    doc["plot"] = plot_path
     tmp = out_path + ".tmp"
     with open(tmp, "w") as f:
         json.dump(doc, f, indent=2)
     os.replace(tmp, out_path)  # never a half-written report
+    print(plot_path)
     print(out_path)
 
 
