@@ -131,13 +131,6 @@ layout(constant_id = 114) const bool VXR_SC_CLASSIFY = true;
 // (docs/skipping-perf.md, tenth round).
 layout(constant_id = 115) const uint VXR_SC_TEXEL_BYTES = 0u;
 
-// Off: no ray of this pipeline's dispatches has a lens warp, an underlay,
-// jitter or a cut plane, so their code compiles away; lavapipe runs an if's
-// code even where no lane takes it (the MRI's E-A pipeline: 4202 instructions
-// against 4516, about 1% of its frame: docs/skipping-perf.md, twenty-third
-// round). The default is the general path.
-layout(constant_id = 117) const bool VXR_SC_VIEW_EXTRAS = true;
-
 // Brick b's record, read once per brick a ray enters.
 BrickRecord brick_record(uint b) {
   if (!VXR_SC_RECORD_TEXELS) return bricks[b];
@@ -583,7 +576,7 @@ bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
   t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
   t1 = min(min(min(tmax.x, tmax.y), tmax.z), g_t_limit);
   const vec4 pl = br.plane;
-  if (VXR_SC_VIEW_EXTRAS && pl.xyz != vec3(0.0)) {
+  if (pl.xyz != vec3(0.0)) {
     const float num = dot(pl.xyz, e) + pl.w, den = dot(pl.xyz, dl);
     if (den > 0.0) t0 = max(t0, -num / den);
     else if (den < 0.0) t1 = min(t1, -num / den);
@@ -636,7 +629,7 @@ void main() {
 
   vec2 ndc = (vec2(pix) + 0.5) / vec2(width, height) * 2.0 - 1.0;
   ivec2 full_pix = ivec2(pix);  // the pixel of the full image the ray goes through (the underlay's)
-  if (VXR_SC_VIEW_EXTRAS && p.warp.z > 1u) {
+  if (p.warp.z > 1u) {
     const vec2 n = vec2(width, height), e = vec2(p.warp.xy);
     const float s = float(p.warp.z);
     const vec2 full = n + 2.0 * e * (s - 1.0);
@@ -648,12 +641,12 @@ void main() {
   vec3 dir = normalize(raw_dir);
   const float ray_len = length(raw_dir);  // t units per unit of view depth
   g_dir = dir;
-  const bool underlay = VXR_SC_VIEW_EXTRAS && (flags & VXR_BRICK_UNDERLAY) != 0u;
+  const bool underlay = (flags & VXR_BRICK_UNDERLAY) != 0u;
   // A view depth z lies at t = z * |raw_dir| (raw_dir has unit view depth), as in the CPU reference.
   if (underlay) g_t_limit = imageLoad(under_depth, full_pix).r * length(raw_dir);
 
   // Where samples sit in their step (P.march.w < 0: jitter), as in the CPU reference.
-  const float offset = VXR_SC_VIEW_EXTRAS && P.march.w < 0.0 ? vxr_jitter(uvec2(full_pix)) : P.march.w;
+  const float offset = P.march.w < 0.0 ? vxr_jitter(uvec2(full_pix)) : P.march.w;
 
   float t0, t1;
   // A work item's pixel that misses its brick leaves the accumulation alone.

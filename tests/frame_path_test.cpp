@@ -272,28 +272,6 @@ TEST_CASE("volume renderer: new poses and sizes build no pipeline and read nothi
   CHECK(gpu::readback_count() == readbacks);
 }
 
-TEST_CASE("volume renderer: a cut plane that cuts nothing keeps the plain view's pixels, through a variant of its own") {
-  // A view with no warp, underlay, jitter or cut plane draws with pipelines
-  // that lack their code (constant 117); one with a cut plane builds the
-  // general variant. Both must draw the same pixels where the cut keeps all.
-  test::GpuTestScope scope;
-  auto src = vessels_source(128);
-  auto r = make_renderer(*src);
-  const Camera cam = orbit_camera(r->placement(), 30, 20);
-  const ImageRgba8 plain = converged(*r, cam, vessels(), 48, 48);
-  BrickFrameSettings cut;
-  cut.lod.cut.enabled = true;
-  cut.lod.cut.normal = {0.2, -0.3, 1.0};
-  cut.lod.cut.offset = 1e4;  // dot(normal, p) + offset > 0 everywhere in the volume: all kept
-  const uint64_t built = test::gpu_context().pipelines_built();
-  BrickFrameStats st;
-  auto img = r->render(cam, vessels(), cut, 48, 48, &st);
-  REQUIRE(img.is_ok());
-  REQUIRE(st.lod.missing == 0);
-  CHECK(test::gpu_context().pipelines_built() > built);
-  CHECK(img->pixels == plain.pixels);
-}
-
 TEST_CASE("volume renderer: streamed bricks arrive from the loader threads and converge to render()'s image") {
   test::GpuTestScope scope;
   auto src = vessels_source(256);

@@ -523,10 +523,9 @@ bool any_gamma(const RenderSettings& s, uint32_t channels) {
 
 Result<const gpu::ComputePipeline*> BrickRenderer::pipeline_for(const RenderSettings& s, uint32_t model,
                                                                 uint32_t texel_bytes, bool cells, FastReads fast,
-                                                                SampleWork work, bool waves, bool view_extras,
-                                                                bool no_bricks) {
+                                                                SampleWork work, bool waves, bool no_bricks) {
   ShaderVariant v{.model = model, .channels = channels(), .cells = cells, .fast = fast, .work = work,
-                  .no_bricks = no_bricks, .waves = waves, .texel_bytes = texel_bytes, .view_extras = view_extras};
+                  .no_bricks = no_bricks, .waves = waves, .texel_bytes = texel_bytes};
   v.gradient = s.gradient_opacity.enabled;
   v.depth_color = s.depth_color != DepthColorMode::kOff;
   v.gamma = any_gamma(s, v.channels);
@@ -575,8 +574,7 @@ Result<const gpu::ComputePipeline*> BrickRenderer::variant(const ShaderVariant& 
       {113, v.waves},
       {114, v.classify},
       {115, v.texel_bytes},
-      {116, v.hue_tables},
-      {117, v.view_extras}}};
+      {116, v.hue_tables}}};
   VariantKey key;  // the constants' values identify the variant
   for (size_t i = 0; i < constants.size(); ++i) key[i] = constants[i].value;
   std::map<VariantKey, gpu::ComputePipeline>& variants = pipes_->variants;
@@ -808,7 +806,7 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
 Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
                                   uint32_t w, uint32_t h, uint32_t bricks, uint64_t records, const AtlasReads& atlas,
                                   BrickPassMode mode, const WorkSpans& spans, const RenderTarget& target,
-                                  CellWalk cell_walk, SampleWork work, bool cut_plane, CellClassInputs* classify,
+                                  CellWalk cell_walk, SampleWork work, CellClassInputs* classify,
                                   BrickFrameStats* stats) {
   // RGBA8 UNORM with a storage view: the rays write it. Anything else (BGRA,
   // sRGB, float, no storage usage): final float pixels go to the
@@ -860,9 +858,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                     cell_keys_.size / sizeof(float) <= ctx_.limits().maxTexelBufferElements;
   const gpu::ComputePipeline* pipe = nullptr;
   const bool waves = mode == BrickPassMode::kMultipass;
-  // The pipelines without that code where the view needs none of it (constant 117).
-  const bool extras = cut_plane || s.jitter || under != 0u || target.warp_x.active() || target.warp_y.active();
-  VXR_ASSIGN_OR_RETURN(pipe, pipeline_for(s, model, atlas.texel_bytes, cells, fast, work, waves, extras));
+  VXR_ASSIGN_OR_RETURN(pipe, pipeline_for(s, model, atlas.texel_bytes, cells, fast, work, waves));
   const glm::uvec3& atlas_texels = atlas.texels;
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(walk.cell_size));
@@ -952,7 +948,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
     // Built with the marching variant, even while no tile is empty, so a
     // view that later leaves tiles empty builds no pipeline mid-session.
     VXR_ASSIGN_OR_RETURN(const gpu::ComputePipeline* empty_pipe,
-                         pipeline_for(s, model, atlas.texel_bytes, false, {}, work, false, extras, true));
+                         pipeline_for(s, model, atlas.texel_bytes, false, {}, work, false, true));
     // The tiles whose bricks all march without a walk, with the variant
     // that has no cell code: lavapipe runs an if's code even where no lane
     // takes it, so a walk no ray needs still cost each brick a pass (`vxr
@@ -961,7 +957,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
     if (cells_per_axis > 0) {
       FastReads no_cells = fast;
       no_cells.cell_bits = no_cells.key_texels = false;
-      VXR_ASSIGN_OR_RETURN(plain_pipe, pipeline_for(s, model, atlas.texel_bytes, false, no_cells, work, false, extras));
+      VXR_ASSIGN_OR_RETURN(plain_pipe, pipeline_for(s, model, atlas.texel_bytes, false, no_cells, work, false));
     }
     const uint32_t list_flags = VXR_BRICK_TILE_LISTS | VXR_BRICK_TILE_SUBSET | out_flags;
     if (plain_pipe == pipe) {
@@ -1590,7 +1586,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   }
   VXR_RETURN_IF_ERROR(record_cast(cmd, set, s, params.control.x, width, height, static_cast<uint32_t>(lod.draw.size()),
                                   table_base, reads_of(pool_->atlas(), pool_->atlas_texels_view() != nullptr), mode,
-                                  spans, target, walk, frame.sample_work, frame.lod.cut.enabled, &classify, &st));
+                                  spans, target, walk, frame.sample_work, &classify, &st));
   ++views_;
   table_used_ = table_base + table_bytes;
   items_used_ = items_base + items_bytes;
@@ -1849,7 +1845,7 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
     gpu::write_storage_image(ctx_, mono_set_, 3, accum_.view);
     recorded = record_cast(cmd, mono_set_, s, params.control.x, width, height, 1, 0,
                            reads_of(mono_tex_.at(0), !mono_texels_.empty()), BrickPassMode::kSinglePass, {}, target,
-                           CellWalk::kOff, SampleWork::kShade, clip.cut.enabled, nullptr, &st);
+                           CellWalk::kOff, SampleWork::kShade, nullptr, &st);
   }));
   VXR_RETURN_IF_ERROR(recorded);
   st.render_ms = ms_since(t0);

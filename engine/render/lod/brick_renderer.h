@@ -75,7 +75,7 @@ namespace vxr {
 // constants' values, BrickRenderer::ShaderVariant). Renderers on one gpu::Context may
 // share them: lavapipe compiles each variant on the CPU, which dominates
 // creating a renderer for a small volume (tests, the stability suite).
-inline constexpr size_t kVariantConstants = 18;  // brick_raycast.comp's ids 100..117
+inline constexpr size_t kVariantConstants = 17;  // brick_raycast.comp's ids 100..116
 using VariantKey = std::array<uint32_t, kVariantConstants>;
 struct BrickPipelines {
   std::map<VariantKey, gpu::ComputePipeline> variants;
@@ -340,14 +340,13 @@ class BrickRenderer final : public VolumeRenderer {
     bool classify = false;   // the cell classification pass's pipeline (no other dispatch carries its code)
     uint32_t texel_bytes = 0;  // AtlasReads::texel_bytes
     bool hue_tables = false;   // lookups through the single-hue rows (TransferTable::hue)
-    bool view_extras = true;   // its rays may have a lens warp, an underlay, jitter or a cut plane
   };
   // The pipeline specialised for the settings (model: VXR_MODEL_*, channels,
   // features), for whether its dispatches use empty-space cells, the
   // fast reads it uses (FastReads) and whether it marches multipass waves.
   Result<const gpu::ComputePipeline*> pipeline_for(const RenderSettings& s, uint32_t model, uint32_t texel_bytes,
                                                    bool cells, FastReads fast, SampleWork work, bool waves,
-                                                   bool view_extras, bool no_bricks = false);
+                                                   bool no_bricks = false);
   // Whether rays of `model` (VXR_MODEL_*) look colours up in the single-hue
   // rows (BrickRendererOptions::hue_tables, the uploaded table's hues).
   bool hue_lookups(uint32_t model) const;
@@ -420,7 +419,7 @@ class BrickRenderer final : public VolumeRenderer {
   Status record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model, uint32_t width,
                      uint32_t height, uint32_t bricks, uint64_t records, const AtlasReads& atlas, BrickPassMode mode,
                      const WorkSpans& spans, const RenderTarget& target, CellWalk cells,
-                     SampleWork work, bool cut_plane, CellClassInputs* classify, BrickFrameStats* stats);
+                     SampleWork work, CellClassInputs* classify, BrickFrameStats* stats);
   // Multipass work items (brick, 8x8 tile) grouped into waves, written at
   // `dst` (capacity entries); returns (first item, count) per wave.
   // `ax`, `ay`: the ray grid (identity_warp, or the lens warp's).
