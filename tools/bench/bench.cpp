@@ -1,5 +1,7 @@
 #include "bench.h"
 
+#include "bench/plot.h"
+#include "core/image.h"
 #include "core/output_file.h"
 
 #include <algorithm>
@@ -60,6 +62,14 @@ Result<std::string> write_report(const BenchOptions& o, const std::string& name,
   if (Status w = write_file_atomically(path, doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n"); !w) return w;
   if (o.json) std::printf("%s\n", doc.dump(2).c_str());
   std::printf("%s\n", path.c_str());
+  return path;
+}
+
+Result<std::string> write_plot(const BenchOptions& o, const std::string& name, const PlotSpec& plot) {
+  std::error_code ec;
+  std::filesystem::create_directories(o.out_dir, ec);
+  const std::string path = (std::filesystem::path(o.out_dir) / (name + ".png")).string();
+  VXR_RETURN_IF_ERROR(write_png(path, render_plot(plot)));
   return path;
 }
 

@@ -16,6 +16,8 @@
 
 namespace vxr::bench {
 
+struct PlotSpec;
+
 struct BenchOptions {
   bool json = false;                // print the JSON document on stdout too
   std::string out_dir = "out/bench";
@@ -38,6 +40,10 @@ double ms_since(std::chrono::steady_clock::time_point t0);
 // with --json). Returns the path.
 Result<std::string> write_report(const BenchOptions& options, const std::string& name, nlohmann::json doc,
                                  const gpu::Context* ctx);
+
+// Draws `plot` to <out_dir>/<name>.png (atomically; creates the folder).
+// Returns the path, for the report and for the caller to print.
+Result<std::string> write_plot(const BenchOptions& options, const std::string& name, const PlotSpec& plot);
 
 // One registration per benchmark, called from tools/cmd_bench.cpp.
 void add_roofline_bench(CLI::App& bench, cli::Invocation& inv);

@@ -372,15 +372,13 @@ int run(const Options& o) {
   plot.y_label = "RMSE (8-bit units)";
   plot.log_x = true;
   plot.log_y = true;
-  const std::array<uint8_t, 3> colours[] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44}, {148, 103, 189},
-                                            {255, 127, 14}, {140, 86, 75}};
   std::map<std::string, size_t> family_series;
   for (size_t k = 0; k < variants.size(); ++k) {
     auto it = family_series.find(variants[k].family);
     if (it == family_series.end()) {
       PlotSeries s;
       s.label = variants[k].family;
-      s.color = colours[family_series.size() % 6];
+      s.color = series_colour(family_series.size());
       plot.series.push_back(s);
       it = family_series.emplace(variants[k].family, plot.series.size() - 1).first;
     }
@@ -401,11 +399,9 @@ int run(const Options& o) {
   def.x = {d.time};
   def.y = {d.error};
   plot.series.push_back(def);
-  const ImageRgba8 png = render_plot(plot);
-  std::error_code ec;
-  std::filesystem::create_directories(o.common.out_dir, ec);
-  const std::string png_path = (std::filesystem::path(o.common.out_dir) / "accuracy.png").string();
-  if (Status s = write_png(png_path, png); !s) return cli::fail(s);
+  auto png = write_plot(o.common, "accuracy", plot);
+  if (!png) return cli::fail(png.status());
+  const std::string& png_path = *png;
   doc["plot"] = png_path;
 
   std::fprintf(stderr, "accuracy: %zu points, %zu on the front; default %s: %.1f ms, RMSE %.3f, %s (%.1f%% over the front's time at equal error)\n",

@@ -291,10 +291,9 @@ int run_movie(const MovieOptions& o) {
     s.y.push_back(per_volume_ms[i]);
   }
   plot.series.push_back(s);
-  std::error_code ec;
-  std::filesystem::create_directories(o.common.out_dir, ec);
-  const std::string png_path = (std::filesystem::path(o.common.out_dir) / "movie.png").string();
-  if (Status st = write_png(png_path, render_plot(plot)); !st) return cli::fail(st);
+  auto png = write_plot(o.common, "movie", plot);
+  if (!png) return cli::fail(png.status());
+  const std::string& png_path = *png;
   doc["plot"] = png_path;
   std::fprintf(stderr,
                "movie: %u x %llux%llux%llu volumes, %u loops: data path %.1f volumes/s sustained (first loop %.1f), bare "

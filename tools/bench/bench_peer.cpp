@@ -23,7 +23,6 @@
 // Beside the report, peer.png plots each scene's time against its error,
 // skipping on and off, with the RMSE goal.
 #include <algorithm>
-#include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -35,7 +34,6 @@
 #include "bench.h"
 #include "bench/brick_timing.h"
 #include "bench/plot.h"
-#include "core/image.h"
 #include "core/output_file.h"
 #include "core/progress.h"
 #include "render/lod/brick_renderer.h"
@@ -150,17 +148,14 @@ PlotSpec peer_plot(const nlohmann::json& scenes, double rmse_goal, uint32_t size
   plot.x_label = "wall ms per frame";
   plot.y_label = "RMSE vs the CPU reference (8-bit units)";
   plot.log_x = plot.log_y = true;
-  const std::array<uint8_t, 3> colours[] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44}, {148, 103, 189}};
   double lo = 1e300, hi = 0.0;
   for (size_t i = 0; i < scenes.size(); ++i) {
-    const std::array<uint8_t, 3> c = colours[i % 4];
     PlotSeries on, off;
     on.label = scenes[i]["scene"].get<std::string>() + ", skipping on";
-    on.color = c;
+    on.color = series_colour(i);
     on.line = true;
     off.label = scenes[i]["scene"].get<std::string>() + ", skipping off";
-    // The same hue, halfway to white.
-    off.color = {uint8_t((c[0] + 255) / 2), uint8_t((c[1] + 255) / 2), uint8_t((c[2] + 255) / 2)};
+    off.color = lighter(on.color);
     for (const nlohmann::json& row : scenes[i]["steps"]) {
       const double err = row["rmse_vs_reference"], on_ms = row["on"]["wall_ms"], off_ms = row["off"]["wall_ms"];
       on.x.push_back(on_ms), on.y.push_back(err);
@@ -270,12 +265,10 @@ int run(const Options& o) {
       std::printf("%-18s no step reached rmse <= %.2f\n", sc.name.c_str(), o.rmse_goal);
   }
   progress.finish();
-  std::error_code ec;
-  std::filesystem::create_directories(o.common.out_dir, ec);
-  const std::string png_path = (std::filesystem::path(o.common.out_dir) / "peer.png").string();
-  if (Status s = write_png(png_path, render_plot(peer_plot(per_scene, o.rmse_goal, o.size))); !s) return fail(s);
-  std::printf("%s\n", png_path.c_str());
-  doc["plot"] = png_path;
+  auto png = write_plot(o.common, "peer", peer_plot(per_scene, o.rmse_goal, o.size));
+  if (!png) return fail(png.status());
+  std::printf("%s\n", png->c_str());
+  doc["plot"] = *png;
   doc["scenes"] = per_scene;
   doc["units"] = {{"time", "median wall ms of one converged frame (traversal, submit, ray cast, readback); gpu_ms from "
                             "timestamps around the frame's commands"},

@@ -6,16 +6,13 @@
 // Its share is taken against the ceiling kernel timed in turn with its
 // frames (the calibration printed first is only the device's figure).
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <optional>
 
 #include "assets/assets.h"
 #include "bench.h"
 #include "bench/plot.h"
-#include "core/image.h"
 #include "render/camera.h"
 #include "render/lod/brick_renderer.h"
 #include "render/volume_session.h"
@@ -79,14 +76,11 @@ PlotSpec roofline_plot(const nlohmann::json& rows, uint32_t size) {
   plot.title = "vxr bench roofline: share of the ceiling, " + std::to_string(size) + "x" + std::to_string(size);
   plot.x_label = "scene (legend)";
   plot.y_label = "samples/s over the ceiling's, timed in turn";
-  const std::array<uint8_t, 3> colours[] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44}, {148, 103, 189},
-                                            {255, 127, 14}, {140, 86, 75}};
   for (size_t i = 0; i < rows.size(); ++i) {
-    const std::array<uint8_t, 3> c = colours[i % 6];
     const double x = double(i + 1), ceiling = rows[i]["ceiling_samples_per_s"];
     PlotSeries frame;
     frame.label = std::to_string(i + 1) + ": " + rows[i]["scene"].get<std::string>();
-    frame.color = c;
+    frame.color = series_colour(i);
     frame.marker_radius = 5;
     frame.x = {x};
     frame.y = {rows[i]["roofline_ratio"].get<double>()};
@@ -94,7 +88,7 @@ PlotSpec roofline_plot(const nlohmann::json& rows, uint32_t size) {
     if (rows[i].contains("fetch_only")) {
       PlotSeries fetch;
       fetch.label = std::to_string(i + 1) + ": fetch only";
-      fetch.color = {uint8_t((c[0] + 255) / 2), uint8_t((c[1] + 255) / 2), uint8_t((c[2] + 255) / 2)};
+      fetch.color = lighter(series_colour(i));
       fetch.x = {x};
       fetch.y = {rows[i]["fetch_only"]["samples_per_s"].get<double>() / ceiling};
       plot.series.push_back(std::move(fetch));
@@ -240,12 +234,10 @@ void add_roofline_bench(CLI::App& bench, cli::Invocation& inv) {
                       "ceiling_samples_per_s, the trilinear kernel timed in turn with the scene's frames"},
             {"scenes", rows}}},
       };
-      std::error_code ec;
-      std::filesystem::create_directories(opt->out_dir, ec);
-      const std::string png_path = (std::filesystem::path(opt->out_dir) / "roofline.png").string();
-      if (Status s = write_png(png_path, render_plot(roofline_plot(rows, *size))); !s) return cli::fail(s);
-      std::printf("%s\n", png_path.c_str());
-      doc["plot"] = png_path;
+      auto png = write_plot(*opt, "roofline", roofline_plot(rows, *size));
+      if (!png) return cli::fail(png.status());
+      std::printf("%s\n", png->c_str());
+      doc["plot"] = *png;
       auto path = write_report(*opt, "roofline", doc, &ctx);
       return path ? cli::kExitOk : cli::fail(path.status());
     };

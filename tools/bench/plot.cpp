@@ -145,6 +145,16 @@ struct Axis {
 
 }  // namespace
 
+std::array<uint8_t, 3> series_colour(size_t i) {
+  static constexpr std::array<uint8_t, 3> kColours[] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44},
+                                                        {148, 103, 189}, {255, 127, 14}, {140, 86, 75}};
+  return kColours[i % std::size(kColours)];
+}
+
+std::array<uint8_t, 3> lighter(std::array<uint8_t, 3> c) {
+  return {uint8_t((c[0] + 255) / 2), uint8_t((c[1] + 255) / 2), uint8_t((c[2] + 255) / 2)};
+}
+
 ImageRgba8 render_plot(const PlotSpec& spec) {
   ImageRgba8 img(spec.width, spec.height);
   std::fill(img.pixels.begin(), img.pixels.end(), 255);

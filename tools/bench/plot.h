@@ -31,4 +31,9 @@ struct PlotSpec {
 // Points with non-finite coordinates (or <= 0 on a log axis) are skipped.
 ImageRgba8 render_plot(const PlotSpec& spec);
 
+// The reports' series colours, in turn (six, then again), and a colour
+// halfway to white: the same series' second kind (skipping off, a probe).
+std::array<uint8_t, 3> series_colour(size_t i);
+std::array<uint8_t, 3> lighter(std::array<uint8_t, 3> c);
+
 }  // namespace vxr::bench
