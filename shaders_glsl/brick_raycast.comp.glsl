@@ -81,6 +81,11 @@ layout(binding = 15, rgba32f) uniform readonly imageBuffer record_texels;
 // and past the channel count, a stand-in that is never read.
 layout(binding = 17, r32ui) uniform readonly uimageBuffer atlas_texels[VXR_MAX_CHANNELS];
 
+// The whole work-list buffer (binding 6 is the view's part) as RGBA32UI
+// texels, this view's list from p.records.y (specialisation constant 108;
+// see work_item).
+layout(binding = 18, rgba32ui) uniform readonly uimageBuffer item_texels;
+
 layout(push_constant) uniform Push { BrickCastParams pass_params; };
 // The two blocks' copies, made before main's first branch: in a branch or a
 // loop lavapipe (Mesa 22) reads a uniform as a gather, lane by lane behind a
@@ -95,8 +100,8 @@ layout(constant_id = 106) const bool VXR_SC_CELLS = true;
 // VXR_SAMPLE_*: anything but SHADE is a benchmark's probe (shared/brick_params.h);
 // its pixels show what the probe summed, not an image.
 layout(constant_id = 107) const uint VXR_SC_SAMPLE_WORK = VXR_SAMPLE_SHADE;
-// The brick records as texels (binding 15), set where the device's texel
-// buffers hold the table: on lavapipe a storage buffer load loops over the
+// The brick records and work items as texels (bindings 15, 18), set where
+// the device's texel buffers hold the table and the list: on lavapipe a storage buffer load loops over the
 // lanes with a branch per lane and component, a uniform buffer's in a loop
 // gathers each component lane by lane, a texel load takes a whole vec4 per
 // lane (MRI E-A at step 1: 39.8 ms against 41.1 through a uniform buffer,
@@ -143,6 +148,15 @@ BrickRecord brick_record(uint b) {
   r.atlas = imageLoad(record_texels, at + 4);
   r.plane = imageLoad(record_texels, at + 5);
   return r;
+}
+
+// Entry i of the view's work list. On lavapipe a storage buffer load loops
+// over the lanes with a bounds check and a branch per lane even where every
+// lane reads the same entry: the list's loads took 13% of the sparse
+// vessels' frame at step 1000 (a perf profile of the shader's code).
+uvec4 work_item(uint i) {
+  if (!VXR_SC_RECORD_TEXELS) return items[i];
+  return imageLoad(item_texels, int(p.records.y + i));
 }
 
 // The ray's unit direction in level-0 voxels: samples are taken in the brick's
@@ -613,14 +627,14 @@ void main() {
   uvec2 pix = gl_WorkGroupID.xy * 8u + local;
   uint tile = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
   if ((flags & VXR_BRICK_TILE_SUBSET) != 0u) {
-    const uvec4 entry = items[p.pass.x + gl_WorkGroupID.x];
+    const uvec4 entry = work_item(p.pass.x + gl_WorkGroupID.x);
     tile = entry.x;
     pix = entry.yz + local;
   }
   uint first = p.control.z, last = p.control.z + p.control.w;
   const bool item_mode = VXR_SC_WAVES && (flags & VXR_BRICK_WORK_ITEMS) != 0u;
   if (item_mode) {
-    const uvec4 item = items[p.pass.x + gl_WorkGroupID.x];
+    const uvec4 item = work_item(p.pass.x + gl_WorkGroupID.x);
     pix = item.yz + local;
     first = item.x;
     last = item.x + 1u;
@@ -663,7 +677,7 @@ void main() {
 
   const bool tile_lists = (flags & VXR_BRICK_TILE_LISTS) != 0u;
   if (tile_lists) {
-    const uvec4 list = items[tile];
+    const uvec4 list = work_item(tile);
     first = list.x;
     last = list.x + list.y;
   }
@@ -698,15 +712,25 @@ void main() {
       // workgroup's, and a ray that ends leaves the loop): the broadcast says
       // so, for compilers that then load the record once per subgroup (GPUs'
       // scalar loads; lavapipe still gathers, see brick_record).
-      const uvec4 entry = tile_lists ? items[j] : uvec4(j, 0u, 0u, 0u);
-      const uint b = subgroupBroadcastFirst(entry.x);
-      const BrickRecord br = brick_record(b);
-      bool hit = item_mode || segment(br, dir, t0, t1);
-      if (hit && tile_lists) {
-        // The view depths where this tile's rays can meet the brick's kept cells (build_tile_lists).
-        t0 = max(t0, uintBitsToFloat(entry.y) * ray_len);
-        t1 = min(t1, uintBitsToFloat(entry.z) * ray_len);
-        hit = t1 > t0;
+      // The entries whose segment no ray of the group meets, passed by in a
+      // loop of their own before the first walk, whose masked pass would
+      // cost each one as much again.
+      uint b;
+      BrickRecord br;
+      bool hit;
+      for (;;) {
+        const uvec4 entry = tile_lists ? work_item(j) : uvec4(j, 0u, 0u, 0u);
+        b = subgroupBroadcastFirst(entry.x);
+        br = brick_record(b);
+        hit = item_mode || segment(br, dir, t0, t1);
+        if (hit && tile_lists) {
+          // The view depths where this tile's rays can meet the brick's kept cells (build_tile_lists).
+          t0 = max(t0, uintBitsToFloat(entry.y) * ray_len);
+          t1 = min(t1, uintBitsToFloat(entry.z) * ray_len);
+          hit = t1 > t0;
+        }
+        if (!kHeadSearch || j + 1u >= last || subgroupAny(hit)) break;
+        ++j;
       }
       n = 0;
       k = 0;

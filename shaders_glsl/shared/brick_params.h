@@ -100,7 +100,8 @@ struct BrickCastParams {
   // the last texel along x and y (x | y << 16), w: along z.
   uvec4 texels;
   // x: the view's first brick record as a texel of binding 15 (the brick
-  // table as RGBA32F texels, 6 a record; specialisation constant 108).
+  // table as RGBA32F texels, 6 a record), y: its work list's first entry as
+  // a texel of binding 18 (specialisation constant 108).
   uvec4 records;
 };
 

@@ -35,6 +35,7 @@ std::vector<VkDescriptorSetLayoutBinding> bindings() {
       {15, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // brick records as texels
       {16, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // cell keys as texels
       {17, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, VXR_MAX_CHANNELS, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // atlas texel views
+      {18, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},  // work items as texels
   };
 }
 
@@ -307,8 +308,9 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   VXR_ASSIGN_OR_RETURN(r->counters_, gpu::create_buffer(ctx, {kSampleCounterBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                                               gpu::MemoryIntent::kReadback, "brick counters"}));
   VXR_ASSIGN_OR_RETURN(r->items_, gpu::create_buffer(ctx, {uint64_t(options.max_work_items) * sizeof(glm::uvec4),
-                                                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                                           gpu::MemoryIntent::kUpload, "brick work items"}));
+                                                           kWorkListUsage, gpu::MemoryIntent::kUpload,
+                                                           "brick work items"}));
+  VXR_RETURN_IF_ERROR(r->make_item_texels());
   if (ctx.timestamp_period_ns() > 0.0) {
     VkQueryPoolCreateInfo qi{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     qi.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -352,6 +354,7 @@ Result<std::unique_ptr<BrickRenderer>> BrickRenderer::create(gpu::Context& ctx, 
   }
   gpu::write_storage_buffer(ctx, r->mono_set_, 4, r->table_.buffer);
   gpu::write_storage_buffer(ctx, r->mono_set_, 6, r->items_.buffer);
+  gpu::write_storage_texel_buffer(ctx, r->mono_set_, 18, r->item_texels_.get());
   gpu::write_uniform_buffer(ctx, r->mono_set_, 7, r->params_.buffer, sizeof(shader::RaycastParams));
   VXR_RETURN_IF_ERROR(r->ensure_target(1, 1));  // the storage binding needs an image even when views blit
   VXR_RETURN_IF_ERROR(r->pin_resident(0));
@@ -851,7 +854,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   // the view's fit (binding 14 starts at the view's first); MIP / MinIP keys
   // as texels where the device has enough.
   FastReads fast;
-  fast.record_texels = opt_.texel_brick_records && table_texels_fit_;
+  fast.record_texels = opt_.texel_brick_records && table_texels_fit_ && item_texels_fit_;
   fast.cell_bits = cells_per_axis > 0 && !reduce && opt_.uniform_cell_bits && classify &&
                    bricks * cell_bits_bytes(walk) <= cell_bits_window_bytes(classify->bits_offset);
   fast.key_texels = cells_per_axis > 0 && reduce && opt_.texel_cell_keys &&
@@ -863,7 +866,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   p.atlas_inv = glm::vec4(1.0f / atlas_texels.x, 1.0f / atlas_texels.y, 1.0f / atlas_texels.z,
                           float(walk.cell_size));
   p.texels = glm::uvec4(atlas.pitch, (atlas_texels.x - 1) | (atlas_texels.y - 1) << 16, atlas_texels.z - 1);
-  p.records = glm::uvec4(uint32_t(records / sizeof(glm::vec4)), 0, 0, 0);
+  p.records = glm::uvec4(uint32_t(records / sizeof(glm::vec4)), spans.list_texel, 0, 0);
   if (target.warp_x.active() || target.warp_y.active())
     p.warp = glm::uvec4(target.warp_x.active() ? target.warp_x.edge_warped : 0u,
                         target.warp_y.active() ? target.warp_y.edge_warped : 0u,
@@ -1340,12 +1343,24 @@ Status BrickRenderer::grow_work_list(size_t entries) {
                         std::to_string(bytes >> 20) + " MiB), more than one storage buffer holds on this device (" +
                         std::to_string(ctx_.limits().maxStorageBufferRange >> 20) +
                         " MiB); raise the LOD bias or use a smaller image");
-  VXR_ASSIGN_OR_RETURN(gpu::Buffer grown, gpu::create_buffer(ctx_, {bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                                                    gpu::MemoryIntent::kUpload, "brick work items"}));
+  VXR_ASSIGN_OR_RETURN(gpu::Buffer grown, gpu::create_buffer(ctx_, {bytes, kWorkListUsage, gpu::MemoryIntent::kUpload,
+                                                                    "brick work items"}));
   retired_buffers_.push_back(std::move(items_));
+  retired_views_.push_back(std::move(item_texels_));
   items_ = std::move(grown);
   items_used_ = 0;
+  VXR_RETURN_IF_ERROR(make_item_texels());
   gpu::write_storage_buffer(ctx_, mono_set_, 6, items_.buffer);  // not bound in a view's frame
+  gpu::write_storage_texel_buffer(ctx_, mono_set_, 18, item_texels_.get());
+  return Status::ok();
+}
+
+Status BrickRenderer::make_item_texels() {
+  // All of the list where the device's texel buffers hold it, else a stand-in over its start that no ray reads.
+  const uint64_t texels = items_.size / sizeof(glm::uvec4);
+  item_texels_fit_ = texels <= ctx_.limits().maxTexelBufferElements;
+  VXR_ASSIGN_OR_RETURN(item_texels_, gpu::create_buffer_view(ctx_, items_.buffer, VK_FORMAT_R32G32B32A32_UINT, 0,
+                                                             item_texels_fit_ ? items_.size : sizeof(glm::uvec4)));
   return Status::ok();
 }
 
@@ -1362,6 +1377,7 @@ Status BrickRenderer::begin_frame(VkCommandBuffer cmd, const BrickFrameSettings&
   VXR_RETURN_IF_ERROR(ensure_timepoint(frame.lod.timepoint));
   retired_.clear();  // the caller waited for the frame that used them
   retired_buffers_.clear();
+  retired_views_.clear();
   views_ = 0;
   table_used_ = items_used_ = bits_used_ = 0;
   tf_recorded_ = false;
@@ -1555,6 +1571,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   gpu::write_storage_image(ctx_, set, 10, target.under.present() ? target.under.color : no_under_color_.view.get());
   gpu::write_storage_buffer(ctx_, set, 4, table_.buffer, table_bytes, table_base);
   gpu::write_storage_buffer(ctx_, set, 6, items_.buffer, items_bytes, items_base);
+  gpu::write_storage_texel_buffer(ctx_, set, 18, item_texels_.get());
+  spans.list_texel = static_cast<uint32_t>(items_base / sizeof(glm::uvec4));
   gpu::write_uniform_buffer(ctx_, set, 7, params_.buffer, sizeof(shader::RaycastParams), params_offset);
   // This view's region of the cell bits (the finest walk's size): the rays
   // index it by their record, and it outlives the frame for the next one's.

@@ -321,7 +321,7 @@ class BrickRenderer final : public VolumeRenderer {
   // lavapipe: where what the view reads fits. lavapipe runs both sides of a
   // branch, so each is a constant.
   struct FastReads {
-    bool record_texels = false;  // the brick records as texels (15 over 4)
+    bool record_texels = false;  // the brick records and work items as texels (15 over 4, 18 over 6)
     bool cell_bits = false;  // the E-A and emission cells' emptiness bits (14 over 13)
     bool key_texels = false;  // the MIP / MinIP cells' keys as texels (16 over 11; constant 111)
   };
@@ -410,6 +410,7 @@ class BrickRenderer final : public VolumeRenderer {
     std::vector<glm::uvec2> waves;
     glm::uvec2 marched_tiles{0, 0}, plain_tiles{0, 0}, empty_tiles{0, 0};
     uint32_t tile_entries = 0, blocks = 0;  // build_tile_lists: bricks on tiles, blocks projected
+    uint32_t list_texel = 0;  // the list's first entry as a texel of binding 18 (the whole work-list buffer)
   };
   // `model`: the packed parameters' VXR_MODEL_* (control.x). `records`:
   // where the view's brick records start in table_ (bytes, a multiple of
@@ -442,6 +443,10 @@ class BrickRenderer final : public VolumeRenderer {
   // A work list of at least `entries` (twice the old at least), the old one
   // kept until the next begin_frame: the frame's earlier views still read it.
   Status grow_work_list(size_t entries);
+  // item_texels_ for the current items_.
+  Status make_item_texels();
+  static constexpr VkBufferUsageFlags kWorkListUsage =
+      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT;
   LodView view_for(const Camera& camera, uint32_t width, uint32_t height) const;
 
   gpu::Context& ctx_;
@@ -477,10 +482,13 @@ class BrickRenderer final : public VolumeRenderer {
   std::vector<BrickBox> block_world_;  // record_view's scratch: the walked bricks' blocks (march_box), world boxes
   std::vector<gpu::Image> retired_;  // replaced while a frame may still use them; freed at begin_frame
   std::vector<gpu::Buffer> retired_buffers_;  // likewise (a work list that grew)
+  std::vector<gpu::Handle<VkBufferView>> retired_views_;  // likewise (its texel view)
   gpu::Buffer table_, counters_, items_, params_, transfer_buf_, tf_staging_, cell_keys_, cell_bits_;
   // table_ as RGBA32F texels for the rays' record reads (declared after it: destroyed first).
   gpu::Handle<VkBufferView> table_texels_;
   bool table_texels_fit_ = false;  // table_texels_ covers the whole table
+  gpu::Handle<VkBufferView> item_texels_;  // items_ as RGBA32UI texels (binding 18)
+  bool item_texels_fit_ = false;           // item_texels_ covers the whole list
   // cell_keys_ as R32F texels, which the rays' MIP / MinIP key tests read (declared after it: destroyed first).
   gpu::Handle<VkBufferView> cell_key_texels_;
   std::vector<std::optional<CellClassInputs>> classified_;  // per view of a frame: what its pass left (none: unknown)
