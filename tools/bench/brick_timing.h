@@ -24,9 +24,10 @@ struct TimedFrames {
 
 // Frame settings of one view timed in turn: each rendered until every
 // brick is resident (an error past 200 frames) and warmed up, then
-// `repeats` rounds that draw each once, so a busy machine's drift falls on
-// all of them alike and their ratios hold (skipping on against off); the
-// median wall and GPU time of each. `after_round`, if set, runs after each
+// `repeats` rounds that draw each in turn (a frame shorter than 20 ms
+// several times back to back, up to 50), so a busy machine's drift falls
+// on all of them alike and their ratios hold (skipping on against off);
+// the median wall and GPU time of each over all its timed frames. `after_round`, if set, runs after each
 // round, and an untimed frame of the first kind follows it.
 Result<std::vector<TimedFrames>> time_in_turn(BrickRenderer& r, const Camera& cam, const RenderSettings& s,
                                               const std::vector<BrickFrameSettings>& frames, uint32_t size,
