@@ -101,12 +101,12 @@ layout(constant_id = 106) const bool VXR_SC_CELLS = true;
 // its pixels show what the probe summed, not an image.
 layout(constant_id = 107) const uint VXR_SC_SAMPLE_WORK = VXR_SAMPLE_SHADE;
 // The brick records and work items as texels (bindings 15, 18), set where
-// the device's texel buffers hold the table and the list: on lavapipe a storage buffer load loops over the
-// lanes with a branch per lane and component, a uniform buffer's in a loop
-// gathers each component lane by lane, a texel load takes a whole vec4 per
-// lane (MRI E-A at step 1: 39.8 ms against 41.1 through a uniform buffer,
-// docs/skipping-perf.md, twelfth round). A constant, not a flag: lavapipe
-// runs both sides of a branch on a flag.
+// the device's texel buffers hold the table and the list: on lavapipe a
+// storage buffer load loops over the lanes with a branch per lane and
+// component, a uniform buffer's in a loop gathers each component lane by
+// lane, a texel load takes a whole vec4 per lane (MRI E-A at step 1: 39.8
+// ms against 41.1 through a uniform buffer, docs/skipping-perf.md, twelfth
+// round). A constant, not a flag: lavapipe runs both sides of a branch on a flag.
 layout(constant_id = 108) const bool VXR_SC_RECORD_TEXELS = false;
 // The cell tests' emptiness bits through their uniform window (binding 14),
 // set where the view's bits fit it (a flag cost 1-2%: both sides ran).
