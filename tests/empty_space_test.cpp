@@ -639,7 +639,7 @@ TEST_CASE("empty-space cells: walking 2-voxel cells or 2x2x2 groups of them give
   }
 }
 
-TEST_CASE("empty-space cells: the cell bits, keys and brick records read through their uniform windows or texels and the storage buffers agree") {
+TEST_CASE("empty-space cells: the cell bits, keys, brick records and work list read through their uniform windows or texels and the storage buffers agree") {
   test::GpuTestScope scope;
   BrickRendererOptions uniform, storage;
   storage.uniform_cell_bits = false;

@@ -107,9 +107,9 @@ struct BrickRendererOptions {
   // through a storage buffer. False: always the storage buffer (tests pin
   // that both agree).
   bool uniform_cell_bits = true;
-  // The rays read the brick records as texels of the brick table where the
-  // device's texel buffers hold it, else through a storage buffer. False:
-  // always the storage buffer.
+  // The rays read the brick records and their work list as texels of the
+  // brick table and the list's buffer where the device's texel buffers hold
+  // both, else through storage buffers. False: always the storage buffers.
   bool texel_brick_records = true;
   // MIP / MinIP cell tests read the keys as texels of a uniform texel
   // buffer where the device holds them all, else from the storage buffer.
