@@ -47,6 +47,15 @@ double median_ms(int repeats, const std::function<Status()>& fn, Status* error) 
   return median(times);
 }
 
+namespace {
+// <out_dir>/<file>, the folder created if need be (a failure shows when the file is written).
+std::string out_path(const BenchOptions& o, const std::string& file) {
+  std::error_code ec;
+  std::filesystem::create_directories(o.out_dir, ec);
+  return (std::filesystem::path(o.out_dir) / file).string();
+}
+}  // namespace
+
 Result<std::string> write_report(const BenchOptions& o, const std::string& name, nlohmann::json doc,
                                  const gpu::Context* ctx) {
   nlohmann::json machine = {{"cpu_threads", std::thread::hardware_concurrency()}};
@@ -56,9 +65,7 @@ Result<std::string> write_report(const BenchOptions& o, const std::string& name,
     machine["fingerprint"] = ctx->info().fingerprint();
   }
   doc["machine"] = machine;
-  std::error_code ec;
-  std::filesystem::create_directories(o.out_dir, ec);
-  const std::string path = (std::filesystem::path(o.out_dir) / (name + ".json")).string();
+  const std::string path = out_path(o, name + ".json");
   if (Status w = write_file_atomically(path, doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n"); !w) return w;
   if (o.json) std::printf("%s\n", doc.dump(2).c_str());
   std::printf("%s\n", path.c_str());
@@ -66,9 +73,7 @@ Result<std::string> write_report(const BenchOptions& o, const std::string& name,
 }
 
 Result<std::string> write_plot(const BenchOptions& o, const std::string& name, const PlotSpec& plot) {
-  std::error_code ec;
-  std::filesystem::create_directories(o.out_dir, ec);
-  const std::string path = (std::filesystem::path(o.out_dir) / (name + ".png")).string();
+  const std::string path = out_path(o, name + ".png");
   VXR_RETURN_IF_ERROR(write_png(path, render_plot(plot)));
   return path;
 }
