@@ -41,3 +41,21 @@ TEST_CASE("bench plot: points land where their coordinates say, on linear and lo
   const ImageRgba8 img2 = bench::render_plot(spec);
   CHECK(img2.width == 400);
 }
+
+TEST_CASE("bench plot: y_from_zero puts 0 on a linear y axis, so heights read from the floor") {
+  bench::PlotSpec spec{.title = "shares", .x_label = "scene", .y_label = "share", .width = 400, .height = 300};
+  bench::PlotSeries a;
+  a.label = "share";
+  a.x = {1, 3};
+  a.y = {5, 10};
+  a.color = {200, 0, 0};
+  spec.series.push_back(a);
+  // Plot area as above: x 80..380, y 240 (bottom) .. 40 (top); each axis padded by 5% of its span.
+  // From its data alone the y axis spans 4.75..10.25: y = 5 sits near the bottom.
+  CHECK(has_colour_near(bench::render_plot(spec), 95, 231, 2, {200, 0, 0}));
+  // From zero it spans -0.5..10.5: y = 5 is at 240 - 5.5 / 11 * 200 = 140.
+  spec.y_from_zero = true;
+  const ImageRgba8 img = bench::render_plot(spec);
+  CHECK(has_colour_near(img, 95, 140, 2, {200, 0, 0}));
+  CHECK_FALSE(has_colour_near(img, 95, 231, 3, {200, 0, 0}));
+}

@@ -168,6 +168,7 @@ ImageRgba8 render_plot(const PlotSpec& spec) {
     xs.insert(xs.end(), s.x.begin(), s.x.end());
     ys.insert(ys.end(), s.y.begin(), s.y.end());
   }
+  if (spec.y_from_zero && !spec.log_y) ys.push_back(0.0);
   ax.fit(xs);
   ay.fit(ys);
   auto px = [&](double v) { return left + (ax.map(v) - ax.lo) / (ax.hi - ax.lo) * (right - left); };

@@ -24,6 +24,7 @@ struct PlotSpec {
   std::string title;
   std::string x_label, y_label;
   bool log_x = false, log_y = false;
+  bool y_from_zero = false;  // a linear y axis reaches 0 (shares, counts: heights read from the floor)
   uint32_t width = 800, height = 560;
   std::vector<PlotSeries> series;
 };
