@@ -20,6 +20,7 @@
 // an apron of 2 voxels for them (BrickPool).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_vote : require
 
@@ -631,6 +632,12 @@ void main() {
     tile = entry.x;
     pix = entry.yz + local;
   }
+  if ((flags & VXR_BRICK_BLOCK_SUBSET) != 0u) {
+    // One 4x2 block per subgroup of 8, the subgroup's own lanes across it.
+    const uvec4 entry = work_item(p.pass.x + gl_WorkGroupID.x * gl_NumSubgroups + gl_SubgroupID);
+    tile = entry.x;
+    pix = entry.yz + uvec2(gl_SubgroupInvocationID & 3u, gl_SubgroupInvocationID >> 2u);
+  }
   uint first = p.control.z, last = p.control.z + p.control.w;
   const bool item_mode = VXR_SC_WAVES && (flags & VXR_BRICK_WORK_ITEMS) != 0u;
   if (item_mode) {
@@ -709,7 +716,7 @@ void main() {
     // against 29 with it: eighteenth round).
     for (;;) {
       // Every active lane of a subgroup is at the same j (the list is its
-      // workgroup's, and a ray that ends leaves the loop): the broadcast says
+      // tile's, and a ray that ends leaves the loop): the broadcast says
       // so, for compilers that then load the record once per subgroup (GPUs'
       // scalar loads; lavapipe still gathers, see brick_record).
       // The entries whose segment no ray of the group meets, passed by in a

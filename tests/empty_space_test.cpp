@@ -553,6 +553,76 @@ TEST_CASE("empty-space cells: tile lists clipped to the depths of each brick's k
   }
 }
 
+TEST_CASE("empty-space cells: tiled E-A and emission frames dispatch only the 4x2 blocks some entry reaches: same image") {
+  // Where a subgroup is 8 invocations (lavapipe at 256 bits), the tiles with a
+  // walked brick go out as the 4x2 pixel blocks whose rays can meet a
+  // brick's kept blocks; the others keep the clear, which is what their
+  // rays, meeting only empty cells, would finish as (build_tile_lists,
+  // BrickRendererOptions::group_lists). Against whole tiles: the same bytes
+  // and samples, 8-bit and float targets, from outside, along an axis, from
+  // inside, with an ROI and a cut. MIP keeps whole tiles (an empty MIP ray
+  // finishes otherwise than one that sampled zeros).
+  test::GpuTestScope scope;
+  auto src = sparse_vessels(128);
+  BrickRendererOptions tiles_only;
+  tiles_only.group_lists = false;
+  auto by_groups = small_pool_renderer(*src);
+  auto whole = small_pool_renderer(*src, tiles_only);
+  const bool eight_wide = test::gpu_context().info().subgroup_size == 8;
+  struct View {
+    const char* what;
+    Camera cam;
+    RoiBox roi;
+    CutPlane cut;
+  };
+  const glm::dvec3 n = glm::normalize(glm::dvec3(1, 1, 0.5));
+  const View views[] = {
+      {"orbit", orbit_camera(by_groups->placement(), 30, 25, 1.25), {}, {}},
+      {"along x", orbit_camera(by_groups->placement(), 0, 0), {}, {}},
+      {"eye inside", orbit_camera(by_groups->placement(), 20, 10, 0.2), {}, {}},
+      {"roi", orbit_camera(by_groups->placement(), 30, 25, 1.25), {true, {10, 20, 5}, {100, 90, 120}}, {}},
+      {"cut", orbit_camera(by_groups->placement(), -40, 30, 1.25), {}, {true, n, -glm::dot(n, glm::dvec3(64))}},
+  };
+  constexpr uint32_t kSide = 97;  // tiles and blocks cut by the image's edges
+  constexpr uint32_t kTiles = (kSide + 7) / 8 * ((kSide + 7) / 8);
+  for (const View& v : views) {
+    for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip}) {
+      const RenderSettings s = vessel_settings(model);
+      BrickFrameSettings f;
+      f.lod.force_level = 0;
+      f.lod.roi = v.roi;
+      f.lod.cut = v.cut;
+      f.mode = BrickPassMode::kTiled;
+      BrickFrameStats on, off;
+      const ImageRgba8 a = converge(*by_groups, v.cam, s, f, kSide, kSide, &on);
+      const ImageRgba8 b = converge(*whole, v.cam, s, f, kSide, kSide, &off);
+      const uint32_t marched = kTiles - on.tiles_empty - on.tiles_plain;
+      const std::string what = std::string(v.what) + " " + optical_model_name(model) + ": blocks " +
+                               std::to_string(on.groups_marched) + " of " + std::to_string(8 * marched) + " on " +
+                               std::to_string(marched) + " marched tiles; samples " + std::to_string(on.samples) +
+                               " vs " + std::to_string(off.samples);
+      INFO(what);
+      CHECK(test::looks_non_blank(a));
+      CHECK(a.pixels == b.pixels);
+      CHECK(on.samples == off.samples);
+      CHECK(off.groups_marched == 0);
+      if (eight_wide && model != OpticalModel::kMip) {
+        CHECK(on.groups_marched > 0);
+        CHECK(on.groups_marched < 8 * marched);
+      } else {
+        CHECK(on.groups_marched == 0);
+      }
+      // Float pixels: the accumulation image, cleared the same way, then a blit.
+      auto fa = by_groups->render_float(v.cam, s, f, kSide, kSide);
+      auto fb = whole->render_float(v.cam, s, f, kSide, kSide);
+      REQUIRE(fa.is_ok());
+      REQUIRE(fb.is_ok());
+      CHECK(fa->rgba == fb->rgba);
+      MESSAGE(what);
+    }
+  }
+}
+
 TEST_CASE("empty-space cells: a pool uses 2-voxel cells where the slots its source can fill allow, else 4") {
   test::GpuTestScope scope;
   BrickPoolOptions o;

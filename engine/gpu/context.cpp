@@ -191,6 +191,8 @@ Status Context::init(const ContextOptions& options) {
                        "; vxr needs Vulkan 1.3 (update the GPU driver)");
 
   VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+  VkPhysicalDeviceVulkan11Properties v11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_PROPERTIES};
+  driver.pNext = &v11;
   VkPhysicalDeviceProperties2 props2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
   props2.pNext = &driver;
   vkGetPhysicalDeviceProperties2(physical_device_, &props2);
@@ -199,6 +201,7 @@ Status Context::init(const ContextOptions& options) {
   info_.driver_info = driver.driverInfo;
   info_.api_version = properties_.apiVersion;
   info_.type = properties_.deviceType;
+  info_.subgroup_size = v11.subgroupSize;
 
   // One queue that does graphics and compute (every desktop GPU and lavapipe has it).
   uint32_t nfam = 0;

@@ -44,6 +44,7 @@ struct DeviceInfo {
   std::string driver_info;  // "Mesa 22.3.6 (LLVM 15.0.6)"
   uint32_t api_version = 0;
   VkPhysicalDeviceType type = VK_PHYSICAL_DEVICE_TYPE_OTHER;
+  uint32_t subgroup_size = 0;  // the default subgroup size (lavapipe: its SIMD width in 32-bit lanes)
   bool is_cpu() const { return type == VK_PHYSICAL_DEVICE_TYPE_CPU; }
   // "Vulkan 1.3.230"
   std::string api_string() const;

@@ -72,6 +72,7 @@ struct BrickFrameStats {
   uint32_t tile_blocks = 0;      // of the walked bricks' kept-cell blocks, those projected for the tiles' depths
   uint32_t tiles_plain = 0;      // tiled frames: tiles whose bricks all march without a walk (a variant without cell code)
   uint32_t tiles_empty = 0;      // tiled frames: tiles no brick touches (the variant without a brick loop)
+  uint32_t groups_marched = 0;   // tiled frames by 4x2 blocks (group_lists): the marched tiles' blocks dispatched; 0: whole tiles
   bool hue_lookups = false;      // the rays looked colours up in the single-hue rows (BrickRendererOptions::hue_tables)
   double traverse_ms = 0.0;      // CPU octree traversal
   double render_ms = 0.0;        // ray-cast submission, wall clock

@@ -41,6 +41,12 @@ using uvec4 = glm::uvec4;
 // that some brick touches this way, and the others, where every ray is empty, with a pipeline
 // without the brick loop (specialisation constant 110).
 #define VXR_BRICK_TILE_SUBSET 4096u
+// With TILE_LISTS, instead of TILE_SUBSET: subgroup s of workgroup i takes entry
+// pass.x + i * subgroups + s, one 4x2 pixel block of a tile, (tile index, x, y in
+// pixels), and marches that tile's list; entries past the image are padding. Only
+// where subgroups are 8 invocations: tiled E-A and emission frames on lavapipe
+// dispatch the blocks some entry can reach this way (build_tile_lists).
+#define VXR_BRICK_BLOCK_SUBSET 8192u
 #define VXR_BRICK_OPAQUE 32u      // final pixel over black: alpha 1 (display targets)
 #define VXR_BRICK_QUANTIZE 64u    // final pixel rounded to 8 bits, v * 255 + 0.5 (UNORM targets: the one rounding rule)
 #define VXR_BRICK_FINAL_FLOAT 128u  // final pixel into the accumulation image (float), for a blit into the target

@@ -1,6 +1,7 @@
 #include "render/lod/brick_renderer.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -806,6 +807,13 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
   std::memcpy(out, &r, sizeof(r));
 }
 
+bool BrickRenderer::clears_tiled_view(const RenderTarget& target, uint32_t w, uint32_t h) const {
+  if (target.under.present() || !opt_.clear_empty_tiles) return false;
+  const bool direct = target.storage_view != VK_NULL_HANDLE && target.format == VK_FORMAT_R8G8B8A8_UNORM;
+  const VkOffset2D at = target.rect.offset;
+  return !direct || (at.x == 0 && at.y == 0 && w == target.extent.width && h == target.extent.height);
+}
+
 Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
                                   uint32_t w, uint32_t h, uint32_t bricks, uint64_t records, const AtlasReads& atlas,
                                   BrickPassMode mode, const WorkSpans& spans, const RenderTarget& target,
@@ -885,11 +893,11 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   // the view's alone (clear_empty_tiles): on lavapipe the dispatch of the
   // variant without bricks costs every ray a call of the shader (MRI E-A at
   // step 1, the render camera: 1.2-2 ms of a 40 ms frame).
+  // With the marched tiles as their reached blocks (spans.by_groups) the
+  // blocks left out are cleared too.
   VkImage cleared = VK_NULL_HANDLE;
-  if (mode == BrickPassMode::kTiled && spans.empty_tiles.y > 0 && !under && opt_.clear_empty_tiles) {
-    if (!direct) cleared = accum_.image;
-    else if (at.x == 0 && at.y == 0 && w == target.extent.width && h == target.extent.height) cleared = target.image;
-  }
+  if (mode == BrickPassMode::kTiled && (spans.empty_tiles.y > 0 || spans.by_groups) && clears_tiled_view(target, w, h))
+    cleared = direct ? target.image : accum_.image;
   if (cleared) {
     VkClearColorValue empty{};  // finish_ray of a ray that took no sample
     empty.float32[3] = target.opaque ? 1.0f : 0.0f;
@@ -933,13 +941,15 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
     ++dispatches;
   };
   const uint32_t max_groups = ctx_.limits().maxComputeWorkGroupCount[0];
-  // Workgroup i takes work entry span.x + i (in dispatches of at most max_groups).
-  auto dispatch_entries = [&](glm::uvec2 span, uint32_t flags) {
-    for (uint32_t done = 0; done < span.y; done += max_groups) {
+  // Workgroup i takes work entries span.x + i * per_workgroup on (in
+  // dispatches of at most max_groups workgroups).
+  auto dispatch_entries = [&](glm::uvec2 span, uint32_t flags, uint32_t per_workgroup = 1) {
+    const uint32_t workgroups = span.y / per_workgroup;
+    for (uint32_t done = 0; done < workgroups; done += max_groups) {
       p.control = glm::uvec4(uint32_t(at.x), uint32_t(at.y), 0, 0);
-      p.pass = glm::uvec4(span.x + done, cells_per_axis, flags, range_cells_per_axis);
+      p.pass = glm::uvec4(span.x + done * per_workgroup, cells_per_axis, flags, range_cells_per_axis);
       vkCmdPushConstants(cmd, pipe->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
-      vkCmdDispatch(cmd, std::min(max_groups, span.y - done), 1, 1);
+      vkCmdDispatch(cmd, std::min(max_groups, workgroups - done), 1, 1);
       ++dispatches;
     }
   };
@@ -967,7 +977,12 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
       // One dispatch: the plain tiles follow the marched ones in the list.
       dispatch_entries({spans.marched_tiles.x, spans.marched_tiles.y + spans.plain_tiles.y}, list_flags);
     } else {
-      dispatch_entries(spans.marched_tiles, list_flags);
+      if (cleared && spans.by_groups) {
+        dispatch_entries(spans.marched_groups, VXR_BRICK_TILE_LISTS | VXR_BRICK_BLOCK_SUBSET | out_flags, 8);
+        if (stats) stats->groups_marched = spans.groups_reached;
+      } else {
+        dispatch_entries(spans.marched_tiles, list_flags);
+      }
       if (spans.plain_tiles.y > 0) {
         if (spans.marched_tiles.y > 0) compute_barrier(cmd);  // other pixels of the same image (see below)
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, plain_pipe->pipeline);
@@ -1088,27 +1103,29 @@ class ScreenBoxes {
 // where the tile's rays can meet a box are those where the centre ray meets
 // the box grown by that much (taken at the box's farthest depth): a chord,
 // much tighter than the depths of the box's corners when the box is oblique.
+// The same for a tile's 4x2 blocks (a SIMD group's rays on lavapipe), whose
+// rays are made for a tile when first asked for.
 class TileFrusta {
  public:
-  // `rays`: storage kept by the caller between views (two vectors a tile: the
-  // centre ray's inverse per unit view depth, and how far the tile's rays
-  // stray from it per world axis per unit view depth).
-  TileFrusta(const LodView& v, const WarpAxis& ax, const WarpAxis& ay, std::vector<glm::dvec3>& rays)
-      : eye_(v.eye), columns_((ax.warped() + 7) / 8), rays_(rays) {
+  // Per tile or block, two vectors (`s`, kept by the caller between views):
+  // the centre ray's inverse per unit view depth, and how far the others
+  // stray from it per world axis per unit view depth. A block's are made
+  // when first asked for.
+  TileFrusta(const LodView& v, const WarpAxis& ax, const WarpAxis& ay, TileRayScratch& s)
+      : view_(v), columns_((ax.warped() + 7) / 8), s_(s) {
     const size_t rows = (ay.warped() + 7) / 8;
-    rays_.resize(2 * columns_ * rows);
+    s_.tiles.resize(2 * columns_ * rows);
     for (size_t ty = 0; ty < rows; ++ty) {
-      const glm::dvec2 y = ndc_span(ay, ty);
-      for (size_t tx = 0; tx < columns_; ++tx) {
-        const glm::dvec2 x = ndc_span(ax, tx);
-        // The centre ray per unit view depth (the shader's raw_dir); an axis
-        // it does not move along gets a huge inverse, never 0 * inf.
-        glm::dvec3 dir = v.forward + x.x * v.right - y.x * v.up;
-        dir = glm::mix(dir, glm::dvec3(1e-300), glm::equal(dir, glm::dvec3(0.0)));
-        rays_[2 * (ty * columns_ + tx)] = 1.0 / dir;
-        rays_[2 * (ty * columns_ + tx) + 1] = x.y * glm::abs(v.right) + y.y * glm::abs(v.up);
-      }
+      const glm::dvec2 y = ndc_span(ay, ty * 8, 8);
+      for (size_t tx = 0; tx < columns_; ++tx) pixel_rays(ndc_span(ax, tx * 8, 8), y, &s_.tiles[2 * (ty * columns_ + tx)]);
     }
+    group_columns_ = (ax.warped() + 3) / 4;
+    group_rows_ = (ay.warped() + 1) / 2;
+    s_.group_spans.resize(group_columns_ + group_rows_);
+    for (size_t i = 0; i < group_columns_; ++i) s_.group_spans[i] = ndc_span(ax, i * 4, 4);
+    for (size_t i = 0; i < group_rows_; ++i) s_.group_spans[group_columns_ + i] = ndc_span(ay, i * 2, 2);
+    s_.groups.resize(16 * columns_ * rows);
+    s_.groups_made.assign(columns_ * rows, 0);
   }
 
   // A box whose corners span view depths `span`, made ready for depths():
@@ -1118,32 +1135,74 @@ class TileFrusta {
     glm::dvec2 span;
   };
   Box prepare(const BrickBox& box, glm::dvec2 span) const {
-    const glm::dvec3 margin = 1e-4 * (box.hi - box.lo) + 1e-6 * (glm::abs(eye_) + 1.0);
-    return {box.lo - margin - eye_, box.hi + margin - eye_, glm::dvec2(std::max(span.x, 0.0), span.y)};
+    const glm::dvec3 margin = 1e-4 * (box.hi - box.lo) + 1e-6 * (glm::abs(view_.eye) + 1.0);
+    return {box.lo - margin - view_.eye, box.hi + margin - view_.eye, glm::dvec2(std::max(span.x, 0.0), span.y)};
   }
 
   // The view depths where tile (tx, ty)'s rays can meet the box, within
   // its corners' depths; empty (x > y) where none does.
   glm::dvec2 depths(uint32_t tx, uint32_t ty, const Box& box) const {
-    const glm::dvec3* t = &rays_[2 * (size_t(ty) * columns_ + tx)];
+    return chord(&s_.tiles[2 * (size_t(ty) * columns_ + tx)], box);
+  }
+
+  // Whether the rays of 4x2 block `group` of tile (tx, ty) (column group & 1,
+  // row group >> 1, as the shader's subgroups take them) can meet the box.
+  bool group_meets(uint32_t tx, uint32_t ty, uint32_t group, const Box& box) {
+    const size_t column = tx * 2 + (group & 1), row = ty * 4 + (group >> 1);
+    if (column >= group_columns_ || row >= group_rows_) return false;  // past the image: no rays
+    const size_t tile = size_t(ty) * columns_ + tx;
+    glm::dvec3* t = &s_.groups[16 * tile + 2 * group];
+    if (!(s_.groups_made[tile] & (1u << group))) {
+      pixel_rays(s_.group_spans[column], s_.group_spans[group_columns_ + row], t);
+      s_.groups_made[tile] |= uint8_t(1u << group);
+    }
+    const glm::dvec2 c = chord(t, box);
+    return c.x <= c.y;
+  }
+
+ private:
+  static glm::dvec2 chord(const glm::dvec3* t, const Box& box) {
     const glm::dvec3 grow = std::max(box.span.y, 0.0) * t[1];  // for the tile's other rays, at the farthest depth
     const glm::dvec3 a = (box.lo - grow) * t[0], b = (box.hi + grow) * t[0];
     const glm::dvec3 near = glm::min(a, b), far = glm::max(a, b);
     return {std::max({box.span.x, near.x, near.y, near.z}), std::min({box.span.y, far.x, far.y, far.z})};
   }
-
- private:
-  // Tile t along an axis: the centre and half-extent in NDC of its pixel centres.
-  static glm::dvec2 ndc_span(const WarpAxis& a, size_t t) {
+  // The centre ray and stray of the pixels whose NDC spans are x and y (ndc_span).
+  void pixel_rays(glm::dvec2 x, glm::dvec2 y, glm::dvec3* out) const {
+    // The centre ray per unit view depth (the shader's raw_dir); an axis
+    // it does not move along gets a huge inverse, never 0 * inf.
+    glm::dvec3 dir = view_.forward + x.x * view_.right - y.x * view_.up;
+    dir = glm::mix(dir, glm::dvec3(1e-300), glm::equal(dir, glm::dvec3(0.0)));
+    out[0] = 1.0 / dir;
+    out[1] = x.y * glm::abs(view_.right) + y.y * glm::abs(view_.up);
+  }
+  // Pixels [first, first + count) along an axis: the centre and half-extent in NDC of their centres.
+  static glm::dvec2 ndc_span(const WarpAxis& a, size_t first, size_t count) {
     const uint32_t n = a.warped();
     auto ndc = [&](size_t px) { return a.from_warped(px + 0.5) / a.full * 2.0 - 1.0; };  // monotonic in px
-    const double first = ndc(t * 8), last = ndc(std::min<size_t>(t * 8 + 7, n - 1));
-    return {0.5 * (first + last), 0.5 * (last - first) + 1e-5};
+    const double lo = ndc(first), hi = ndc(std::min<size_t>(first + count - 1, n - 1));
+    return {0.5 * (lo + hi), 0.5 * (hi - lo) + 1e-5};
   }
-  glm::dvec3 eye_;
-  size_t columns_;
-  std::vector<glm::dvec3>& rays_;
+  const LodView& view_;
+  size_t columns_, group_columns_ = 0, group_rows_ = 0;
+  TileRayScratch& s_;
 };
+
+// The 4x2 blocks of 8x8 tile (tx, ty) that pixel rectangle r (x, y, width,
+// height) overlaps: bit 2 * row + column, as the shader's subgroups take them
+// (VXR_BRICK_BLOCK_SUBSET).
+uint8_t groups_in(const glm::uvec4& r, uint32_t tx, uint32_t ty) {
+  const int x0 = std::max(int(r.x) - int(tx * 8), 0), x1 = std::min(int(r.x + r.z) - int(tx * 8), 8) - 1;
+  const int y0 = std::max(int(r.y) - int(ty * 8), 0), y1 = std::min(int(r.y + r.w) - int(ty * 8), 8) - 1;
+  if (x0 > x1 || y0 > y1) return 0;
+  const uint32_t columns = (2u << (x1 / 4)) - (1u << (x0 / 4));  // bit per column x0 / 4 .. x1 / 4
+  uint32_t m = 0;
+  for (int row = y0 / 2; row <= y1 / 2; ++row) m |= columns << (2 * row);
+  return uint8_t(m);
+}
+
+// A block entry's pixel for padding: past any image, so its rays return at once.
+constexpr uint32_t kPastImage = 0x40000000u;
 
 // The warped-grid pixels covering full-image rectangle r (identity without a warp).
 glm::uvec4 warp_rect(const glm::uvec4& r, const WarpAxis& ax, const WarpAxis& ay) {
@@ -1241,15 +1300,20 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Bri
 
 Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                                        const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
-                                       const LodView& view, const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst,
-                                       size_t capacity, size_t* used, WorkSpans* spans) {
+                                       const LodView& view, const WarpAxis& ax, const WarpAxis& ay, bool by_groups,
+                                       glm::uvec4* dst, size_t capacity, size_t* used, WorkSpans* spans) {
   const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
   spans->blocks = 0;
+  spans->by_groups = by_groups;
   // Scratch kept between views: no allocation per view once sizes settle.
   std::vector<std::vector<TileEntry>>& lists = tile_entries_;
   lists.resize(size_t(tw) * th);
   for (auto& l : lists) l.clear();
   std::vector<glm::dvec2>& depths = tile_depths_;
+  // Per tile, its 4x2 blocks (bit 2 * row + column) whose rays some entry can reach.
+  std::vector<uint8_t>& reached = tile_groups_;
+  reached.assign(by_groups ? lists.size() : 0, 0);
+  tile_rays_.group_tests.clear();
   const ScreenBoxes screen(view);
   std::optional<TileFrusta> frusta;  // built for the view's first brick with blocks
   size_t total = lists.size();
@@ -1264,7 +1328,10 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
     const uint32_t n_blocks = blocks[b].y - blocks[b].x;
     if (n_blocks == 0 || t0 == t1 || spans->blocks + n_blocks > opt_.max_tile_blocks) {
       for (uint32_t y = t0.y; y <= t1.y; ++y)
-        for (uint32_t x = t0.x; x <= t1.x; ++x) lists[size_t(y) * tw + x].push_back({b, all_depths});
+        for (uint32_t x = t0.x; x <= t1.x; ++x) {
+          lists[size_t(y) * tw + x].push_back({b, all_depths});
+          if (by_groups) reached[size_t(y) * tw + x] |= groups_in(r, x, y);
+        }
       continue;
     }
     spans->blocks += n_blocks;
@@ -1285,6 +1352,16 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
           if (!(c.x <= c.y)) continue;  // the tile's rays pass the block by
           glm::dvec2& e = depths[size_t(y - t0.y) * rw + (x - t0.x)];
           e = glm::dvec2(std::min(e.x, c.x), std::max(e.y, c.y));
+          if (!by_groups) continue;
+          uint8_t& r = reached[size_t(y) * tw + x];
+          if (r == 0xff) continue;
+          // A rectangle over the whole tile (inside a dense volume's
+          // silhouette) reaches all its blocks unasked. Elsewhere each block
+          // under the rectangle is tested by its own chord, once every brick
+          // is in (a later rectangle may cover the tile): a test costs about
+          // 30 ns, a block left in only its rays' time.
+          if (q.x <= x * 8 && q.y <= y * 8 && q.x + q.z >= x * 8 + 8 && q.y + q.w >= y * 8 + 8) r = 0xff;
+          else tile_rays_.group_tests.push_back({size_t(y) * tw + x, block.lo, block.hi, block.span, groups_in(q, x, y)});
         }
     }
     for (uint32_t y = t0.y; y <= t1.y; ++y)
@@ -1296,25 +1373,40 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
         lists[size_t(y) * tw + x].push_back({b, glm::vec2(float(std::max(0.0, e.x - margin)), float(e.y + margin))});
       }
   }
+  // The tiles' blocks no rectangle covered, each by its chord.
+  for (const TileRayScratch::GroupTest& g : tile_rays_.group_tests) {
+    uint8_t& r = reached[g.tile];
+    for (uint8_t open = g.groups & ~r; open != 0; open &= uint8_t(open - 1)) {
+      const uint32_t bit = uint32_t(std::countr_zero(open));
+      if (frusta->group_meets(uint32_t(g.tile % tw), uint32_t(g.tile / tw), bit, {g.lo, g.hi, g.span})) r |= uint8_t(1u << bit);
+    }
+  }
   for (const auto& l : lists) total += l.size();
   spans->tile_entries = static_cast<uint32_t>(total - lists.size());
   total += lists.size();  // each tile once more, among those with bricks or those without
+  // Each tile's kind (WorkSpans): some brick walks, none does, no brick.
+  enum TileKind : uint8_t { kMarched, kPlain, kEmpty };
+  tile_kinds_.assign(lists.size(), kEmpty);
+  uint32_t groups = 0;
+  for (size_t t = 0; t < lists.size(); ++t) {
+    for (const TileEntry& e : lists[t])
+      tile_kinds_[t] = walks[e.brick] ? uint8_t(kMarched) : std::min<uint8_t>(tile_kinds_[t], kPlain);
+    if (by_groups && tile_kinds_[t] == kMarched) groups += uint32_t(std::popcount(reached[t]));
+  }
+  const uint32_t padded_groups = (groups + 7) / 8 * 8;  // whole workgroups of 8 subgroups
+  total += padded_groups;
   if (total > capacity) {
     *used = total;  // record_view grows the list to this and builds again
     return out_of_range("render: the view needs " + std::to_string(total) + " tile entries, the frame's work list "
                         "has room for " + std::to_string(capacity) + "; raise the LOD bias or use a smaller image");
   }
   *used = total;
-  // Each tile's list, and its kind (WorkSpans): some brick walks, none does, no brick.
-  enum TileKind : uint8_t { kMarched, kPlain, kEmpty };
-  tile_kinds_.assign(lists.size(), kEmpty);
+  // Each tile's list.
   uint32_t next = static_cast<uint32_t>(lists.size());
   for (size_t t = 0; t < lists.size(); ++t) {
     dst[t] = glm::uvec4(next, uint32_t(lists[t].size()), 0, 0);
-    for (const TileEntry& e : lists[t]) {
+    for (const TileEntry& e : lists[t])
       dst[next++] = glm::uvec4(e.brick, glm::floatBitsToUint(e.depth.x), glm::floatBitsToUint(e.depth.y), 0);
-      tile_kinds_[t] = walks[e.brick] ? uint8_t(kMarched) : std::min<uint8_t>(tile_kinds_[t], kPlain);
-    }
   }
   // Then the tiles as workgroups, by kind, in an order that spreads the
   // image's rows over any contiguous share of a dispatch: lavapipe hands
@@ -1332,6 +1424,19 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
         dst[next++] = glm::uvec4(y * tw + x, x * 8, y * 8, 0);
         ++span.y;
       }
+  }
+  // The marched tiles' reached blocks in the same order, then padding past the image.
+  spans->marched_groups = glm::uvec2(next, padded_groups);
+  spans->groups_reached = groups;
+  if (by_groups) {
+    for (uint32_t y : tile_rows_)
+      for (uint32_t x = 0; x < tw; ++x) {
+        const size_t t = size_t(y) * tw + x;
+        if (tile_kinds_[t] != kMarched) continue;
+        for (uint32_t g = 0; g < 8; ++g)
+          if (reached[t] & (1u << g)) dst[next++] = glm::uvec4(uint32_t(t), x * 8 + 4 * (g & 1), y * 8 + 2 * (g >> 1), 0);
+      }
+    while (next < spans->marched_groups.x + padded_groups) dst[next++] = glm::uvec4(0, kPastImage, kPastImage, 0);
   }
   return Status::ok();
 }
@@ -1528,6 +1633,13 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   VkDeviceSize items_base = align_up(items_used_, salign);
   size_t items_capacity = 0, items_n = 0;
   WorkSpans spans;
+  // The marched tiles as the 4x2 blocks some entry reaches, where one block
+  // is one subgroup and a block left out holds what its rays would finish
+  // as: E-A and emission rays that meet only empty cells, in a view that
+  // record_cast clears first.
+  const bool by_groups = opt_.group_lists && skip_cells && ctx_.info().subgroup_size == 8 &&
+                         (s.model == OpticalModel::kEmissionAbsorption || s.model == OpticalModel::kEmission) &&
+                         clears_tiled_view(target, width, height);
   auto build_work = [&]() -> Status {
     items_capacity = items_base < items_.size ? (items_.size - items_base) / sizeof(glm::uvec4) : 0;
     auto* dst = reinterpret_cast<glm::uvec4*>(static_cast<uint8_t*>(items_.mapped) + items_base);
@@ -1535,7 +1647,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     if (mode == BrickPassMode::kMultipass) {
       VXR_ASSIGN_OR_RETURN(spans.waves, build_waves(march_world, view, ax, ay, dst, items_capacity, &items_n));
     } else if (mode == BrickPassMode::kTiled) {
-      VXR_RETURN_IF_ERROR(build_tile_lists(march_world, walks, blocks_, block_world_, view, ax, ay, dst,
+      VXR_RETURN_IF_ERROR(build_tile_lists(march_world, walks, blocks_, block_world_, view, ax, ay, by_groups, dst,
                                            items_capacity, &items_n, &spans));
     }
     return Status::ok();

@@ -126,6 +126,12 @@ struct BrickRendererOptions {
   // one clear writes them instead of a dispatch of the variant without bricks.
   // False: always the dispatch (tests pin that both agree).
   bool clear_empty_tiles = true;
+  // Tiled E-A and emission frames where a subgroup is 8 invocations
+  // (lavapipe at 256 bits), cleared as above: the tiles with a walked brick
+  // are dispatched as the 4x2 pixel blocks (one subgroup each) whose rays
+  // can meet a brick's kept blocks, so a block whose rays would all find
+  // nothing costs nothing. False: whole tiles (tests pin that both agree).
+  bool group_lists = true;
   // Where every channel's colour map is one hue times a value (gray, red,
   // ..., yellow: TransferTable::hue), E-A and emission rays look a sample up in one texel
   // of that factored table instead of two of the table itself, and additive
@@ -209,6 +215,24 @@ bool brick_state_fits_texel(const RenderSettings& s, uint32_t channels);
 
 // "visited 123 drawn 45 (fallback 2) empty 30 culled 12 missing 3 samples 1.2M uploaded 0.4 MiB hit 97%"
 std::string format_stats(const BrickFrameStats& s);
+
+// BrickRenderer::build_tile_lists' scratch for the rays of a view's 8x8
+// tiles and their 4x2 blocks (TileFrusta in brick_renderer.cpp), kept
+// between views so a frame allocates nothing once sizes settle.
+struct TileRayScratch {
+  std::vector<glm::dvec3> tiles, groups;  // two vectors a tile or block
+  std::vector<uint8_t> groups_made;       // per tile, a bit per block whose rays are made
+  std::vector<glm::dvec2> group_spans;    // each 4-pixel column's and 2-pixel row's NDC span
+  // A kept block's box (relative to the eye, grown; its view depths) to test
+  // against a tile's blocks (`groups`, bits) once the view's bricks are in.
+  struct GroupTest {
+    size_t tile;
+    glm::dvec3 lo, hi;
+    glm::dvec2 span;
+    uint8_t groups;
+  };
+  std::vector<GroupTest> group_tests;
+};
 
 class BrickRenderer final : public VolumeRenderer {
  public:
@@ -409,6 +433,11 @@ class BrickRenderer final : public VolumeRenderer {
   struct WorkSpans {
     std::vector<glm::uvec2> waves;
     glm::uvec2 marched_tiles{0, 0}, plain_tiles{0, 0}, empty_tiles{0, 0};
+    // build_tile_lists' by_groups: the marched tiles' 4x2 blocks some entry
+    // reaches (x: first entry, y: entries padded to whole workgroups of 8), and how many.
+    bool by_groups = false;
+    glm::uvec2 marched_groups{0, 0};
+    uint32_t groups_reached = 0;
     uint32_t tile_entries = 0, blocks = 0;  // build_tile_lists: bricks on tiles, blocks projected
     uint32_t list_texel = 0;  // the list's first entry as a texel of binding 18 (the whole work-list buffer)
   };
@@ -436,10 +465,16 @@ class BrickRenderer final : public VolumeRenderer {
   // rays can meet one of them, with the view depths where they can
   // (TileFrusta; its rays march only those); an empty span, a brick within
   // one tile and bricks past max_tile_blocks clip nothing.
+  // `by_groups`: the tiles with a brick that walks also as the 4x2 blocks
+  // (spans->marched_groups) whose rays can meet a brick's screen rectangle
+  // or, where it has them, one of its blocks (TileFrusta::group_meets).
+  // Whether a tiled view's image is its own (or the accumulation image's)
+  // and has no underlay, so one clear can write its empty rays' pixels.
+  bool clears_tiled_view(const RenderTarget& target, uint32_t w, uint32_t h) const;
   Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                           const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
-                          const LodView& view, const WarpAxis& ax, const WarpAxis& ay, glm::uvec4* dst,
-                          size_t capacity, size_t* used, WorkSpans* spans);
+                          const LodView& view, const WarpAxis& ax, const WarpAxis& ay, bool by_groups,
+                          glm::uvec4* dst, size_t capacity, size_t* used, WorkSpans* spans);
   // A work list of at least `entries` (twice the old at least), the old one
   // kept until the next begin_frame: the frame's earlier views still read it.
   Status grow_work_list(size_t entries);
@@ -475,7 +510,8 @@ class BrickRenderer final : public VolumeRenderer {
   };
   std::vector<std::vector<TileEntry>> tile_entries_;  // build_tile_lists' scratch: per tile, kept between views
   std::vector<glm::dvec2> tile_depths_;               // build_tile_lists' scratch: a brick's depths per tile
-  std::vector<glm::dvec3> tile_rays_;                 // build_tile_lists' scratch: each tile's rays (TileFrusta)
+  std::vector<uint8_t> tile_groups_;                  // build_tile_lists' scratch: per tile, the 4x2 blocks reached
+  TileRayScratch tile_rays_;                          // build_tile_lists' scratch: the tiles' rays (TileFrusta)
   std::vector<BrickBox> march_world_;  // record_view's scratch: per drawn brick, the world box its rays march
   std::vector<uint8_t> walks_;         // record_view's scratch: per drawn brick, whether it walks its cells
   std::vector<glm::uvec2> blocks_;     // record_view's scratch: per drawn brick, its span of block_world_
