@@ -80,6 +80,35 @@ ImageRgba8 converge(BrickRenderer& r, const Camera& cam, const RenderSettings& s
   return {};
 }
 
+// Views of sparse_vessels(128) for the tile-list tests: from outside,
+// along an axis, from inside (blocks reaching behind the eye), with an ROI
+// and with a cut.
+struct ClipView {
+  const char* what;
+  Camera cam;
+  RoiBox roi;
+  CutPlane cut;
+  // A tiled frame at full detail with the view's ROI and cut.
+  BrickFrameSettings frame() const {
+    BrickFrameSettings f;
+    f.lod.force_level = 0;
+    f.lod.roi = roi;
+    f.lod.cut = cut;
+    f.mode = BrickPassMode::kTiled;
+    return f;
+  }
+};
+std::vector<ClipView> clip_views(const VolumePlacement& placement) {
+  const glm::dvec3 n = glm::normalize(glm::dvec3(1, 1, 0.5));
+  return {
+      {"orbit", orbit_camera(placement, 30, 25, 1.25), {}, {}},
+      {"along x", orbit_camera(placement, 0, 0), {}, {}},
+      {"eye inside", orbit_camera(placement, 20, 10, 0.2), {}, {}},
+      {"roi", orbit_camera(placement, 30, 25, 1.25), {true, {10, 20, 5}, {100, 90, 120}}, {}},
+      {"cut", orbit_camera(placement, -40, 30, 1.25), {}, {true, n, -glm::dot(n, glm::dvec3(64))}},
+  };
+}
+
 // Renders `s` from `cam` with skipping on and off (converged): the images
 // must be byte-identical, not blank, and skipping must take fewer samples.
 void check_skipping_keeps_image(BrickRenderer& r, const Camera& cam, const RenderSettings& s, BrickFrameSettings f,
@@ -502,28 +531,10 @@ TEST_CASE("empty-space cells: tile lists clipped to the depths of each brick's k
   BrickRendererOptions few_blocks;
   few_blocks.max_tile_blocks = kFewBlocks;
   auto budgeted = small_pool_renderer(*src, few_blocks);
-  struct View {
-    const char* what;
-    Camera cam;
-    RoiBox roi;
-    CutPlane cut;
-  };
-  const glm::dvec3 n = glm::normalize(glm::dvec3(1, 1, 0.5));
-  const View views[] = {
-      {"orbit", orbit_camera(clipped->placement(), 30, 25, 1.25), {}, {}},
-      {"along x", orbit_camera(clipped->placement(), 0, 0), {}, {}},
-      {"eye inside", orbit_camera(clipped->placement(), 20, 10, 0.2), {}, {}},
-      {"roi", orbit_camera(clipped->placement(), 30, 25, 1.25), {true, {10, 20, 5}, {100, 90, 120}}, {}},
-      {"cut", orbit_camera(clipped->placement(), -40, 30, 1.25), {}, {true, n, -glm::dot(n, glm::dvec3(64))}},
-  };
-  for (const View& v : views) {
+  for (const ClipView& v : clip_views(clipped->placement())) {
     for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kMip}) {
       const RenderSettings s = vessel_settings(model);
-      BrickFrameSettings f;
-      f.lod.force_level = 0;
-      f.lod.roi = v.roi;
-      f.lod.cut = v.cut;
-      f.mode = BrickPassMode::kTiled;
+      const BrickFrameSettings f = v.frame();
       BrickFrameStats on, off, few;
       const ImageRgba8 a = converge(*clipped, v.cam, s, f, 97, 97, &on);
       const ImageRgba8 b = converge(*whole, v.cam, s, f, 97, 97, &off);
@@ -558,10 +569,9 @@ TEST_CASE("empty-space cells: tiled E-A and emission frames dispatch only the 4x
   // walked brick go out as the 4x2 pixel blocks whose rays can meet a
   // brick's kept blocks; the others keep the clear, which is what their
   // rays, meeting only empty cells, would finish as (build_tile_lists,
-  // BrickRendererOptions::group_lists). Against whole tiles: the same bytes
-  // and samples, 8-bit and float targets, from outside, along an axis, from
-  // inside, with an ROI and a cut. MIP keeps whole tiles (an empty MIP ray
-  // finishes otherwise than one that sampled zeros).
+  // BrickRendererOptions::group_lists). Against whole tiles: the same bytes,
+  // 8-bit and float targets, in each of clip_views. MIP keeps whole tiles
+  // (an empty MIP ray finishes otherwise than one that sampled zeros).
   test::GpuTestScope scope;
   auto src = sparse_vessels(128);
   BrickRendererOptions tiles_only;
@@ -569,30 +579,12 @@ TEST_CASE("empty-space cells: tiled E-A and emission frames dispatch only the 4x
   auto by_groups = small_pool_renderer(*src);
   auto whole = small_pool_renderer(*src, tiles_only);
   const bool eight_wide = test::gpu_context().info().subgroup_size == 8;
-  struct View {
-    const char* what;
-    Camera cam;
-    RoiBox roi;
-    CutPlane cut;
-  };
-  const glm::dvec3 n = glm::normalize(glm::dvec3(1, 1, 0.5));
-  const View views[] = {
-      {"orbit", orbit_camera(by_groups->placement(), 30, 25, 1.25), {}, {}},
-      {"along x", orbit_camera(by_groups->placement(), 0, 0), {}, {}},
-      {"eye inside", orbit_camera(by_groups->placement(), 20, 10, 0.2), {}, {}},
-      {"roi", orbit_camera(by_groups->placement(), 30, 25, 1.25), {true, {10, 20, 5}, {100, 90, 120}}, {}},
-      {"cut", orbit_camera(by_groups->placement(), -40, 30, 1.25), {}, {true, n, -glm::dot(n, glm::dvec3(64))}},
-  };
   constexpr uint32_t kSide = 97;  // tiles and blocks cut by the image's edges
   constexpr uint32_t kTiles = (kSide + 7) / 8 * ((kSide + 7) / 8);
-  for (const View& v : views) {
+  for (const ClipView& v : clip_views(by_groups->placement())) {
     for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip}) {
       const RenderSettings s = vessel_settings(model);
-      BrickFrameSettings f;
-      f.lod.force_level = 0;
-      f.lod.roi = v.roi;
-      f.lod.cut = v.cut;
-      f.mode = BrickPassMode::kTiled;
+      const BrickFrameSettings f = v.frame();
       BrickFrameStats on, off;
       const ImageRgba8 a = converge(*by_groups, v.cam, s, f, kSide, kSide, &on);
       const ImageRgba8 b = converge(*whole, v.cam, s, f, kSide, kSide, &off);
@@ -604,7 +596,10 @@ TEST_CASE("empty-space cells: tiled E-A and emission frames dispatch only the 4x
       INFO(what);
       CHECK(test::looks_non_blank(a));
       CHECK(a.pixels == b.pixels);
-      CHECK(on.samples == off.samples);
+      // A block left out takes no sample that shows: the same samples or
+      // fewer (where the rays walk 2x2x2 cells, one of them may hold a kept
+      // cell that the block's rays never meet).
+      CHECK(on.samples <= off.samples);
       CHECK(off.groups_marched == 0);
       if (eight_wide && model != OpticalModel::kMip) {
         CHECK(on.groups_marched > 0);
