@@ -1110,8 +1110,8 @@ class TileFrusta {
   // Per tile or block, two vectors (`s`, kept by the caller between views):
   // the centre ray's inverse per unit view depth, and how far the others
   // stray from it per world axis per unit view depth. A block's are made
-  // when first asked for.
-  TileFrusta(const LodView& v, const WarpAxis& ax, const WarpAxis& ay, TileRayScratch& s)
+  // when first asked for; `groups` false: never asked (no storage for them).
+  TileFrusta(const LodView& v, const WarpAxis& ax, const WarpAxis& ay, TileRayScratch& s, bool groups)
       : view_(v), columns_((ax.warped() + 7) / 8), s_(s) {
     const size_t rows = (ay.warped() + 7) / 8;
     s_.tiles.resize(2 * columns_ * rows);
@@ -1119,6 +1119,7 @@ class TileFrusta {
       const glm::dvec2 y = ndc_span(ay, ty * 8, 8);
       for (size_t tx = 0; tx < columns_; ++tx) pixel_rays(ndc_span(ax, tx * 8, 8), y, &s_.tiles[2 * (ty * columns_ + tx)]);
     }
+    if (!groups) return;
     group_columns_ = (ax.warped() + 3) / 4;
     group_rows_ = (ay.warped() + 1) / 2;
     s_.group_spans.resize(group_columns_ + group_rows_);
@@ -1344,7 +1345,7 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
       if (q.z == 0 || q.w == 0) continue;
       const glm::uvec2 q0 = glm::max(glm::uvec2(q.x, q.y) / 8u, t0);
       const glm::uvec2 q1 = glm::min((glm::uvec2(q.x + q.z, q.y + q.w) - 1u) / 8u, t1);
-      if (!frusta) frusta.emplace(view, ax, ay, tile_rays_);
+      if (!frusta) frusta.emplace(view, ax, ay, tile_rays_, by_groups);
       const TileFrusta::Box block = frusta->prepare(block_boxes[i], d);
       for (uint32_t y = q0.y; y <= q1.y; ++y)
         for (uint32_t x = q0.x; x <= q1.x; ++x) {
