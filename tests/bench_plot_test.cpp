@@ -59,3 +59,32 @@ TEST_CASE("bench plot: y_from_zero puts 0 on a linear y axis, so heights read fr
   CHECK(has_colour_near(img, 95, 140, 2, {200, 0, 0}));
   CHECK_FALSE(has_colour_near(img, 95, 231, 3, {200, 0, 0}));
 }
+
+TEST_CASE("bench plot: the legend takes the corner with the least data under it, on a box no line crosses") {
+  // Plot area as above: x 80..380, y 240 (bottom) .. 40 (top); both axes span -0.5..10.5.
+  bench::PlotSpec spec{.title = "legend", .x_label = "x", .y_label = "y", .width = 400, .height = 300};
+  bench::PlotSeries a;
+  a.label = "points";
+  a.x = {0, 9, 10};
+  a.y = {0, 9, 10};
+  a.color = {200, 0, 0};
+  spec.series.push_back(a);
+  // The legend box is 60 x 17 px, 8 px inside a corner: top left x 88..147, y 48..64;
+  // top right x 312..371. The points (9, 9) and (10, 10) lie at the top right.
+  const std::array<uint8_t, 3> black{0, 0, 0}, red{200, 0, 0};
+  const ImageRgba8 img = bench::render_plot(spec);
+  CHECK(has_colour_near(img, 120, 56, 8, black));
+  CHECK_FALSE(has_colour_near(img, 340, 56, 8, black));
+  CHECK(has_colour_near(img, 366, 49, 2, red));  // the point the old top-right legend would have covered
+
+  // A line along the top and the bottom runs under every corner: the legend
+  // (top left, the first of the corners with the fewest pixels) is drawn over it.
+  spec.series[0].line = true;
+  spec.series[0].markers = false;
+  spec.series[0].x = {0, 10, 10, 0};
+  spec.series[0].y = {10, 10, 0, 0};
+  const ImageRgba8 crossed = bench::render_plot(spec);
+  CHECK(has_colour_near(crossed, 200, 49, 1, red));  // the top line, right of the legend
+  CHECK_FALSE(has_colour_near(crossed, 125, 49, 1, red));  // under the legend's box
+  CHECK(has_colour_near(crossed, 125, 56, 8, black));  // the label
+}

@@ -143,6 +143,52 @@ struct Axis {
   std::string label(double mapped) const { return tick_label(log ? std::pow(10.0, mapped) : mapped); }
 };
 
+// The legend, after the data: in the corner of the plot area where the
+// fewest data pixels lie under it (top right first on a tie), on a white
+// box so that no line runs through its labels.
+void draw_legend(Canvas& cv, const std::vector<PlotSeries>& series, int left, int top, int right, int bottom) {
+  constexpr int kRow = 14, kPad = 5, kMargin = 8;
+  int rows = 0, widest = 0;
+  for (const auto& s : series)
+    if (!s.label.empty()) ++rows, widest = std::max(widest, text_width(s.label));
+  if (rows == 0) return;
+  const int w = 14 + widest + 2 * kPad, h = rows * kRow + 2 * kPad - 7;
+  const std::array<uint8_t, 3> white{255, 255, 255}, grid{225, 225, 225}, frame{160, 160, 160};
+  auto data_pixels = [&](int x0, int y0) {
+    int n = 0;
+    for (int y = y0; y < y0 + h; ++y)
+      for (int x = x0; x < x0 + w; ++x) {
+        const uint8_t* p = cv.img.at(x, y);
+        const bool background = (p[0] == 255 && p[1] == 255 && p[2] == 255) ||
+                                (p[0] == grid[0] && p[1] == grid[1] && p[2] == grid[2]);
+        n += background ? 0 : 1;
+      }
+    return n;
+  };
+  const int xs[2] = {right - kMargin - w, left + kMargin}, ys[2] = {top + kMargin, bottom - kMargin - h};
+  int bx = xs[0], by = ys[0], fewest = -1;
+  if (xs[1] >= xs[0] || ys[1] <= ys[0]) {  // a plot too small for corners: top right
+    bx = std::max(xs[0], 0), by = ys[0];
+  } else {
+    for (int y0 : ys)
+      for (int x0 : xs)
+        if (const int n = data_pixels(x0, y0); fewest < 0 || n < fewest) fewest = n, bx = x0, by = y0;
+  }
+  for (int y = by; y < by + h; ++y)
+    for (int x = bx; x < bx + w; ++x) cv.pixel(x, y, white);
+  cv.line(bx, by, bx + w - 1, by, frame);
+  cv.line(bx, by + h - 1, bx + w - 1, by + h - 1, frame);
+  cv.line(bx, by, bx, by + h - 1, frame);
+  cv.line(bx + w - 1, by, bx + w - 1, by + h - 1, frame);
+  int y = by + kPad;
+  for (const auto& s : series) {
+    if (s.label.empty()) continue;
+    cv.disc(bx + kPad + 4, y + 3, 3, s.color);
+    cv.text(bx + kPad + 14, y, s.label, {0, 0, 0});
+    y += kRow;
+  }
+}
+
 }  // namespace
 
 std::array<uint8_t, 3> series_colour(size_t i) {
@@ -194,7 +240,6 @@ ImageRgba8 render_plot(const PlotSpec& spec) {
   cv.text((left + right) / 2 - text_width(xl) / 2, bottom + 30, xl, black);
   cv.text(12, (top + bottom) / 2 + text_width(yl) / 2, yl, black, 1, /*vertical=*/true);
 
-  int legend_y = top + 8;
   for (const auto& s : spec.series) {
     bool have_prev = false;
     double prev_x = 0, prev_y = 0;
@@ -206,13 +251,8 @@ ImageRgba8 render_plot(const PlotSpec& spec) {
       if (s.markers) cv.disc(int(std::lround(X)), int(std::lround(Y)), s.marker_radius, s.color);
       have_prev = true, prev_x = X, prev_y = Y;
     }
-    if (!s.label.empty()) {
-      const int lx = right - 10 - text_width(s.label) - 16;
-      cv.disc(lx + 4, legend_y + 3, 3, s.color);
-      cv.text(lx + 14, legend_y, s.label, black);
-      legend_y += 14;
-    }
   }
+  draw_legend(cv, spec.series, left, top, right, bottom);
   return img;
 }
 

@@ -1,6 +1,6 @@
 // Small scatter/line plots as PNG for benchmark reports (time vs error,
 // scaling curves). No dependencies beyond core/image: a 5x7 bitmap font,
-// linear or log10 axes, labelled ticks, a legend.
+// linear or log10 axes, labelled ticks, a legend in the corner with the least data.
 #pragma once
 
 #include <array>
