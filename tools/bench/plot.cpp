@@ -143,6 +143,8 @@ struct Axis {
   std::string label(double mapped) const { return tick_label(log ? std::pow(10.0, mapped) : mapped); }
 };
 
+constexpr std::array<uint8_t, 3> kGrid{225, 225, 225};  // grid lines: background, not data, to the legend
+
 // The legend, after the data: in the corner of the plot area where the
 // fewest data pixels lie under it (top right first on a tie), on a white
 // box so that no line runs through its labels.
@@ -153,14 +155,14 @@ void draw_legend(Canvas& cv, const std::vector<PlotSeries>& series, int left, in
     if (!s.label.empty()) ++rows, widest = std::max(widest, text_width(s.label));
   if (rows == 0) return;
   const int w = 14 + widest + 2 * kPad, h = rows * kRow + 2 * kPad - 7;
-  const std::array<uint8_t, 3> white{255, 255, 255}, grid{225, 225, 225}, frame{160, 160, 160};
+  const std::array<uint8_t, 3> white{255, 255, 255}, frame{160, 160, 160};
   auto data_pixels = [&](int x0, int y0) {
     int n = 0;
     for (int y = y0; y < y0 + h; ++y)
       for (int x = x0; x < x0 + w; ++x) {
         const uint8_t* p = cv.img.at(x, y);
         const bool background = (p[0] == 255 && p[1] == 255 && p[2] == 255) ||
-                                (p[0] == grid[0] && p[1] == grid[1] && p[2] == grid[2]);
+                                (p[0] == kGrid[0] && p[1] == kGrid[1] && p[2] == kGrid[2]);
         n += background ? 0 : 1;
       }
     return n;
@@ -205,7 +207,7 @@ ImageRgba8 render_plot(const PlotSpec& spec) {
   ImageRgba8 img(spec.width, spec.height);
   std::fill(img.pixels.begin(), img.pixels.end(), 255);
   Canvas cv{img};
-  const std::array<uint8_t, 3> black{0, 0, 0}, grid{225, 225, 225}, grey{90, 90, 90};
+  const std::array<uint8_t, 3> black{0, 0, 0}, grid = kGrid, grey{90, 90, 90};
   const int left = 80, right = int(spec.width) - 20, top = 40, bottom = int(spec.height) - 60;
 
   Axis ax{spec.log_x}, ay{spec.log_y};
