@@ -169,14 +169,34 @@ vec3 g_dir;
 
 // The brick being marched: vxr_sample reads its atlas slot.
 vec3 g_atlas_origin;
+// The same slot for the rays' own filter (atlas_corners): its origin's
+// word in the texel view, and the atlas's clamps relative to the origin.
+int g_slot_word;
+ivec3 g_slot_lo, g_slot_hi;
+vec2 g_slot_clamp;
+
+void set_atlas_slot(vec3 origin) {
+  g_atlas_origin = origin;
+  if (VXR_SC_TEXEL_BYTES == 0u) return;
+  const ivec3 o = ivec3(origin);  // whole texels (BrickPool::slot_origin)
+  const ivec3 last = ivec3(p.texels.z & 0xffffu, p.texels.z >> 16u, p.texels.w);
+  g_slot_word = o.z * int(p.texels.y) + o.y * int(p.texels.x) + o.x;
+  g_slot_lo = -o;
+  g_slot_hi = last - o;
+  g_slot_clamp = 0.5 - origin.xy;
+}
 // Where the ray ends (t units): the underlay's depth, +inf without one.
 float g_t_limit = 1.0 / 0.0;
 // A probe's sum (VXR_SC_SAMPLE_WORK): stored as the pixel, so its work is kept.
 float g_probe = 0.0;
 
-// Where the sampler's linear filter with clamp-to-edge reads for atlas
-// texel coordinate `a` (texel centres at + 0.5): the words (below) of its
-// low-x corners in the texel view (along rows, then slices), and the weights.
+// Where the sampler's linear filter with clamp-to-edge reads for texel
+// coordinate `a` of the marched brick's slot (texel centres at + 0.5; the
+// slot's interior origin at 0): the words (below) of its low-x corners in
+// the texel view (along rows, then slices), and the weights. Taken relative
+// to the slot, not the atlas, so a sample's weights round alike in every
+// slot: the picture does not depend on where the pool put a brick (which
+// depends on what a session loaded and evicted before).
 struct AtlasCorners {
   int t000, t010, t001, t011;
   vec3 f;
@@ -184,20 +204,19 @@ struct AtlasCorners {
 
 AtlasCorners atlas_corners(vec3 a) {
   // Texel words (below) hold x and x + 1 (u8: and the same of y + 1): left
-  // of the first texel centre the coordinate is clamped to it (weight 0 on
-  // the word's neighbours), which is what the clamped indices give.
-  if (VXR_SC_TEXEL_BYTES != 0u) a.x = max(a.x, 0.5);
-  if (VXR_SC_TEXEL_BYTES == 1u) a.y = max(a.y, 0.5);
+  // of the atlas's first texel centre the coordinate is clamped to it
+  // (weight 0 on the word's neighbours), which is what the clamped indices give.
+  if (VXR_SC_TEXEL_BYTES != 0u) a.x = max(a.x, g_slot_clamp.x);
+  if (VXR_SC_TEXEL_BYTES == 1u) a.y = max(a.y, g_slot_clamp.y);
   const vec3 lo = floor(a - 0.5);
-  const ivec3 last = ivec3(p.texels.z & 0xffffu, p.texels.z >> 16u, p.texels.w);
-  const ivec3 i0 = clamp(ivec3(lo), ivec3(0), last), i1 = clamp(ivec3(lo) + 1, ivec3(0), last);
+  const ivec3 i0 = clamp(ivec3(lo), g_slot_lo, g_slot_hi), i1 = clamp(ivec3(lo) + 1, g_slot_lo, g_slot_hi);
   const int row = int(p.texels.x), slice = int(p.texels.y);
-  const int y0 = i0.y * row, y1 = i1.y * row, z0 = i0.z * slice, z1 = i1.z * slice;
+  const int x0 = g_slot_word + i0.x, y0 = i0.y * row, y1 = i1.y * row, z0 = i0.z * slice, z1 = i1.z * slice;
   AtlasCorners k;
-  k.t000 = z0 + y0 + i0.x;
-  k.t010 = z0 + y1 + i0.x;
-  k.t001 = z1 + y0 + i0.x;
-  k.t011 = z1 + y1 + i0.x;
+  k.t000 = z0 + y0 + x0;
+  k.t010 = z0 + y1 + x0;
+  k.t001 = z1 + y0 + x0;
+  k.t011 = z1 + y1 + x0;
   k.f = a - 0.5 - lo;
   return k;
 }
@@ -235,7 +254,7 @@ vec4 vxr_sample(vec3 pos) {
   const uint b = VXR_SC_TEXEL_BYTES;
   if (b != 0u) {
     // UNORM: the stored integers filtered, then scaled once.
-    const AtlasCorners k = atlas_corners(g_atlas_origin + pos);
+    const AtlasCorners k = atlas_corners(pos);
     vec4 v = vec4(0.0);
     if (b == 1u) {
       VXR_EACH_CHANNEL(v, VXR_QUADS_FILTERED, k)
@@ -747,7 +766,7 @@ void main() {
         // wave's ray does (unpack_ray), so every dispatch mode gives one image.
         if (VXR_SC_CHANNELS == 1 && VXR_SC_MODEL == VXR_MODEL_EMISSION_ABSORPTION) ray.trans = exp(-ray.tau.x);
         e = br.eye.xyz;
-        g_atlas_origin = br.atlas.xyz;
+        set_atlas_slot(br.atlas.xyz);
         dl = dir * br.scale.xyz;
         dt = P.march.x / length(dl);  // one local step, in t units
         i0 = ceil(t0 / dt - offset);

@@ -23,6 +23,7 @@
 //     shader's RGBA8 store and in to_rgba8) adds at most one more level.
 #include <doctest/doctest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <unistd.h>
 
@@ -31,6 +32,7 @@
 #include "render/lod/brick_renderer.h"
 #include "render/reference_renderer.h"
 #include "volume/container_reader.h"
+#include "volume/dense_chunk_source.h"
 #include "render_scenes.h"
 #include "volume/importers/import_source.h"
 #include "volume/memory_slab_source.h"
@@ -694,6 +696,66 @@ TEST_CASE("brick features: a slot filled from apron-1 chunks and their neighbour
     REQUIRE((*p1)->fill_slot(k, a.data()).is_ok());
     REQUIRE((*p2)->fill_slot(k, b.data()).is_ok());
     CHECK(a == b);
+  }
+}
+
+TEST_CASE("brick features: a brick draws the same in any atlas slot: other slot grids, other session histories") {
+  // Which slot a brick lands in depends on the pool's grid and on what the
+  // session loaded before (a viewer that looked elsewhere first, a full pool
+  // that evicted and reloaded). The rays' own filter takes a sample's weights
+  // relative to its brick's slot, so none of that moves a pixel: taken from
+  // atlas coordinates they rounded differently in far slots (1 LSB here).
+  test::GpuTestScope scope;
+  auto vessels_src = vessels_source();
+  auto head = mri();
+  DenseVolume head16 = test::mri();  // u16: the filter's texel pairs instead of quads
+  {
+    std::vector<uint8_t> wide(head16.data.size() * 2);
+    for (size_t i = 0; i < head16.data.size(); ++i) {
+      const uint16_t v = uint16_t(head16.data[i] * 257u);
+      std::memcpy(&wide[i * 2], &v, 2);
+    }
+    head16.data = std::move(wide);
+    head16.dtype = DType::kU16;
+  }
+  auto head16_src = DenseChunkSource::create({head16}, 16, 1);
+  REQUIRE_MESSAGE(head16_src.is_ok(), head16_src.status().to_string());
+  RenderSettings ea16 = test::mri_settings(OpticalModel::kEmissionAbsorption, "gray");
+  ea16.channels[0].window_lo *= 257;
+  ea16.channels[0].window_hi *= 257;
+  struct Scene {
+    const ChunkSource* src;
+    RenderSettings s;
+    Camera cam, away;
+    glm::uvec3 compact, far;  // slot grids: every brick near the atlas's origin, or far along z
+  };
+  // `away`: far off, where the coarse levels load first and take the first slots.
+  const VolumePlacement head_box{head16.dims, head16.voxel_size}, cube{{64, 64, 64}, {1, 1, 1}};
+  const Camera mri_cam = orbit_camera(head_box, 30.0, 25.0, 1.25), mri_away = orbit_camera(head_box, 200, -20, 8);
+  for (const Scene& sc :
+       {Scene{vessels_src.get(), vessels(OpticalModel::kEmissionAbsorption), orbit_camera(cube, 30, 25, 1.25),
+              orbit_camera(cube, 210, -30, 8), {4, 4, 5}, {1, 1, 100}},
+        Scene{vessels_src.get(), vessels(OpticalModel::kMip), orbit_camera(cube, 120, 10, 1.1),
+              orbit_camera(cube, 300, 40, 8), {4, 4, 5}, {1, 1, 100}},
+        Scene{head.get(), test::mri_settings(OpticalModel::kEmissionAbsorption, "gray"), mri_cam, mri_away,
+              {8, 8, 8}, {2, 3, 100}},
+        Scene{head16_src.value().get(), ea16, mri_cam, mri_away, {8, 8, 8}, {2, 3, 100}}}) {
+    CAPTURE(sc.src->info().dims[0]);
+    const std::string dtype = dtype_name(sc.src->info().dtype), model = optical_model_name(sc.s.model);
+    CAPTURE(dtype);
+    CAPTURE(model);
+    auto draw = [&](glm::uvec3 slots, bool looked_away_first) {
+      BrickRendererOptions o;
+      o.pool.slots = slots;
+      auto r = BrickRenderer::create(test::gpu_context(), *sc.src, o);
+      REQUIRE_MESSAGE(r.is_ok(), r.status().to_string());
+      if (looked_away_first) (void)converge(**r, sc.away, sc.s, {}, 160, 128);
+      return converge(**r, sc.cam, sc.s, {}, 160, 128);
+    };
+    const ImageRgba8 fresh = draw(sc.compact, false);
+    CHECK(test::looks_non_blank(fresh));
+    CHECK(draw(sc.far, false).pixels == fresh.pixels);
+    CHECK(draw(sc.compact, true).pixels == fresh.pixels);
   }
 }
 
