@@ -759,6 +759,38 @@ TEST_CASE("brick features: a brick draws the same in any atlas slot: other slot 
   }
 }
 
+TEST_CASE("brick features: an automatic pool holds at most twice a small source's bricks, and still preloads it") {
+  test::GpuTestScope scope;
+  // 64^3 in 16^3 chunks: 64 + 8 + 1 bricks. The automatic grid (up to 16 x
+  // 16 x 8) loses a row of slots while twice the bricks still fit.
+  auto small = vessels_source();
+  const uint64_t bricks = 73;
+  auto pool = BrickPool::create(test::gpu_context(), *small, {});
+  REQUIRE(pool.is_ok());
+  const glm::uvec3 g = (*pool)->slot_grid();
+  const uint32_t largest = std::max({g.x, g.y, g.z});
+  CHECK((*pool)->capacity() >= 2 * bricks);
+  CHECK(uint64_t((*pool)->capacity()) / largest * (largest - 1) < 2 * bricks);
+  BrickRendererOptions o;
+  o.preload_if_fits = true;
+  auto r = BrickRenderer::create(test::gpu_context(), *small, o);
+  REQUIRE(r.is_ok());
+  CHECK((*r)->pool().capacity() == (*pool)->capacity());
+  BrickFrameStats st;
+  auto img = (*r)->render(orbit_camera({{64, 64, 64}, {1, 1, 1}}, 30, 25, 1.25),
+                          vessels(OpticalModel::kEmissionAbsorption), {}, 64, 64, &st);
+  REQUIRE(img.is_ok());
+  CHECK(st.lod.missing == 0);  // every brick was resident from the first frame
+  // A source with more bricks than the budget's grid (32^3 bricks of 34^3 texels: 16 x 16 x 8 fit 1 GiB) keeps it.
+  ProceduralOptions po;
+  po.dims = {4096, 4096, 4096};
+  auto big = ProceduralSource::create(po);
+  REQUIRE(big.is_ok());
+  auto big_pool = BrickPool::create(test::gpu_context(), **big, {});
+  REQUIRE(big_pool.is_ok());
+  CHECK((*big_pool)->slot_grid() == glm::uvec3(16, 16, 8));
+}
+
 TEST_CASE("brick features: atlases read by hand hold a word per texel: u8 (x, y) quads, u16 (x) pairs") {
   // The rays load a u8 texel with its +x, +y and +xy neighbours, or a u16
   // texel with its +x neighbour, as one 32-bit word (BrickPool

@@ -256,6 +256,11 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
   const uint32_t stored = want_views ? texel_word_width(format) : 1;
   const uint64_t view_bytes =
       uint64_t(ctx.limits().maxTexelBufferElements) * gpu::format_texel_bytes(kAtlasTexelElement);
+  // The source's bricks: every level and timepoint.
+  uint64_t bricks = 0;
+  for (const LevelInfo& li : source.levels())
+    bricks += uint64_t(li.chunk_counts[0]) * li.chunk_counts[1] * li.chunk_counts[2];
+  bricks = std::max<uint64_t>(bricks * std::max<uint32_t>(source.info().timepoints, 1), 1);
   if (auto_slots) {
     // Halve the largest axis until the atlases fit (at least 2 x 2 x 2); with
     // texel views then lower it by one until each atlas fits one view (a u8
@@ -268,6 +273,11 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
     };
     while (count() * p->brick_bytes_ * stored > options.auto_atlas_bytes && count() > 8) largest() /= 2;
     while (want_views && count() * p->channel_bytes_ * stored > view_bytes && count() > 8) --largest();
+    // A small source: no more than twice its bricks, so it still preloads
+    // (BrickRenderer::preload_if_fits pins what fits in half the pool) but
+    // holds no atlas it never fills (the bundled MRI: 493 MB of atlas for a
+    // few dozen bricks). Pictures don't depend on the slots (atlas_corners).
+    while (largest() > 1 && count() / largest() * (largest() - 1) >= 2 * bricks) --largest();
   }
   // Lowered further to fit the device, so containers with wide chunks (up to 512 + apron) still draw.
   VXR_ASSIGN_OR_RETURN(slots, fit_slots(slots, p->edge_, p->texel_bytes_ * nch * stored,
@@ -349,13 +359,9 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
                             VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
     }
   }));
-  // Slots handed out: no more than the source has bricks (every level and
-  // timepoint), so a small volume's cells can be finer for the same memory.
-  uint64_t bricks = 0;
-  for (const LevelInfo& li : source.levels())
-    bricks += uint64_t(li.chunk_counts[0]) * li.chunk_counts[1] * li.chunk_counts[2];
-  bricks *= std::max<uint32_t>(source.info().timepoints, 1);
-  const uint32_t usable = uint32_t(std::min<uint64_t>(p->capacity(), std::max<uint64_t>(bricks, 1)));
+  // Slots handed out: no more than the source has bricks, so a small
+  // volume's cells can be finer for the same memory.
+  const uint32_t usable = uint32_t(std::min<uint64_t>(p->capacity(), bricks));
   p->slot_.resize(usable);
   for (uint32_t i = usable; i-- > 0;) p->free_.push_back(i);
   // The finest cells whose ranges fit kMaxCellRangeBytes: 2 voxels, 4, else 8.

@@ -221,6 +221,7 @@ class BrickPool {
   uint32_t channels() const { return static_cast<uint32_t>(atlases_.size()); }
   uint32_t source_channel(uint32_t i) const { return channel_map_[i]; }
   uint32_t apron() const { return apron_; }
+  glm::uvec3 slot_grid() const { return slots_; }
   uint32_t capacity() const { return uint32_t(slots_.x) * slots_.y * slots_.z; }
   uint32_t used() const { return static_cast<uint32_t>(map_.size()); }
   uint64_t brick_bytes() const { return brick_bytes_; }  // one brick, every channel
