@@ -275,8 +275,8 @@ Result<std::unique_ptr<BrickPool>> BrickPool::create(gpu::Context& ctx, const Ch
     while (want_views && count() * p->channel_bytes_ * stored > view_bytes && count() > 8) --largest();
     // A small source: no more than twice its bricks, so it still preloads
     // (BrickRenderer::preload_if_fits pins what fits in half the pool) but
-    // holds no atlas it never fills (the bundled MRI: 493 MB of atlas for a
-    // few dozen bricks). Pictures don't depend on the slots (atlas_corners).
+    // holds no atlas it never fills (the bundled MRI: 392 slots, 493 MB, for
+    // its 17 bricks; now 36). Pictures don't depend on the slots (atlas_corners).
     while (largest() > 1 && count() / largest() * (largest() - 1) >= 2 * bricks) --largest();
   }
   // Lowered further to fit the device, so containers with wide chunks (up to 512 + apron) still draw.
