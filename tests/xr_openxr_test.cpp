@@ -3,6 +3,7 @@
 // (xr/test_runtime), on the same Vulkan device as every other test.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "assets/assets.h"
@@ -33,11 +34,12 @@ TargetFactory openxr() {
   };
 }
 
-Result<ViewStats> run(const DenseVolume& v, uint64_t frames) {
+Result<ViewStats> run(const DenseVolume& v, uint64_t frames, bool skip_empty = true, uint32_t chunk_size = 64) {
   ViewOptions o;
   o.frames = frames;
   o.settings = default_view_settings();
-  auto source = DenseChunkSource::create({v});
+  o.frame.lod.skip_empty = skip_empty;
+  auto source = DenseChunkSource::create({v}, chunk_size);
   if (!source) return source.status();
   return run_view(openxr(), *source, o, default_volume_transform({v.dims, v.voxel_size}));
 }
@@ -92,6 +94,43 @@ TEST_CASE("openxr: a session reaches FOCUSED, renders 32 stereo frames, eye imag
     CHECK(r.passed);
   }
   CHECK_MESSAGE(test::core_validation_messages(dir).empty(), test::core_validation_messages(dir));
+}
+
+TEST_CASE("openxr: with skipping off (vxr view --no-skip) the headset's eyes are the same bytes, no brick skipped") {
+  test::GpuTestScope scope;
+  // Mostly air: a bright ball in one corner of a 128^3 volume.
+  DenseVolume v;
+  v.dims = {128, 128, 128};
+  v.data.resize(v.voxel_count());
+  for (uint32_t z = 0, i = 0; z < 128; ++z)
+    for (uint32_t y = 0; y < 128; ++y)
+      for (uint32_t x = 0; x < 128; ++x, ++i) {
+        const double d = std::sqrt(double((x - 30) * (x - 30) + (y - 34) * (y - 34) + (z - 40) * (z - 40)));
+        v.data[i] = d < 24.0 ? uint8_t(255.0 * (1.0 - d / 24.0)) : 0;
+      }
+  std::vector<ImageRgba8> eyes;
+  std::vector<uint64_t> skipped;
+  for (bool skip : {true, false}) {
+    INFO("skipping " << (skip ? "on" : "off"));
+    const std::string dir = test::xr_out_dir(skip ? "skip_on" : "skip_off");
+    test::use_test_runtime(dir, R"({"view": {"width": 96, "height": 96}, "no_srgb": true, "dump_frames": [4]})");
+    auto stats = run(v, 4, skip, 16);
+    REQUIRE_MESSAGE(stats.is_ok(), stats.status().to_string());
+    skipped.push_back(stats->bricks_skipped_empty);
+    for (const char* eye : {"left", "right"}) {
+      auto img = read_png(dir + "/dump/frame000004_" + eye + ".png");
+      REQUIRE_MESSAGE(img.is_ok(), img.status().to_string());
+      CHECK(test::looks_non_blank(*img));
+      eyes.push_back(std::move(img).value());
+    }
+    CHECK(test::core_validation_messages(dir).empty());
+  }
+  // The air is skipped with skipping on, and only then.
+  CHECK(skipped[0] > 0);
+  CHECK(skipped[1] == 0);
+  REQUIRE(eyes.size() == 4);
+  CHECK(eyes[0].pixels == eyes[2].pixels);
+  CHECK(eyes[1].pixels == eyes[3].pixels);
 }
 
 TEST_CASE("openxr: scripted grab-move and two-hand pinch through the runtime move and scale the volume") {

@@ -65,6 +65,7 @@ void add_view_command(CLI::App& app, Invocation& inv) {
   cmd->add_option("--frame-budget-ms", o->view.frame_budget_ms,
                   "let the LOD bias follow the frame time towards this many milliseconds");
   cmd->add_option("--lod-bias", o->view.lod_bias, "log2 voxel-to-pixel ratio (start value with --frame-budget-ms)");
+  cmd->add_flag("--no-skip", o->view.no_skip, "march empty space too (no brick or cell skipping; same image, for timing)");
   cmd->add_option("--json", o->view.json,
                   "write frame figures here: p50/p99 frame ms, frames complete, pipelines after frame 1, readbacks");
   cmd->add_option("--movie", o->view.movie,

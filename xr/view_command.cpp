@@ -347,6 +347,7 @@ Status ViewCommand::run() {
   vo.channels = session_->channels;
   vo.warp.enabled = o_.lens_warp;
   vo.frame.lod.lod_bias = o_.lod_bias;
+  vo.frame.lod.skip_empty = !o_.no_skip;
   vo.frame.lod.timepoint = session_->timepoint;
   vo.frame_budget_ms = o_.frame_budget_ms;
   // A headset keeps its own head pose and fov: the volume is placed so the head

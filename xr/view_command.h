@@ -32,6 +32,7 @@ struct ViewCommandOptions {
   double frame_budget_ms = 0.0;
   double lod_bias = 0.0;
   bool lod_bias_given = false;  // false: a card's lod bias
+  bool no_skip = false;         // march empty space too (same images; to time what skipping buys)
   std::string json;             // frame figures written here
   std::string movie;            // headless MP4 of the pose script's path
   double fps = 30.0;

@@ -269,6 +269,7 @@ Result<Outcome> run_once(FrameTarget& target, const std::shared_ptr<const ChunkS
         VXR_RETURN_IF_ERROR(eyes->record(commands.cmd, v, frame->views[v], stats.transform, settings, fs,
                                          options.warp, *image, &rays, &st));
         stats.rays += rays;
+        stats.bricks_skipped_empty += st.lod.skipped_empty;
         missing += st.lod.missing;
         if (v == 0) stats.bricks_uploaded += st.bricks_uploaded;
         ++views_drawn;
@@ -345,6 +346,8 @@ nlohmann::json view_stats_json(const ViewStats& s, const ViewOptions& o) {
   j["readbacks_per_frame"] = s.frames_rendered ? double(s.readbacks) / double(s.frames_rendered) : 0.0;
   j["submits_per_frame"] = 1;
   j["rays"] = s.rays;
+  j["empty_space_skipping"] = o.frame.lod.skip_empty;
+  j["bricks_skipped_empty"] = s.bricks_skipped_empty;
   j["bricks_uploaded"] = s.bricks_uploaded;
   j["lens_warp"] = o.warp.enabled;
   j["frame_ms"] = s.frame_ms;

@@ -87,6 +87,7 @@ struct ViewStats {
   std::vector<double> lod_bias;  // the LOD bias each rendered frame used
   std::vector<uint64_t> frame_missing;  // bricks each rendered frame drew from an ancestor (still streaming)
   uint64_t rays = 0;
+  uint64_t bricks_skipped_empty = 0;  // over every drawn view: bricks the traversal dropped as empty (none with skipping off)
   uint64_t pipelines_first_frame = 0;        // pipelines built up to the end of frame 1
   uint64_t pipelines_after_first_frame = 0;  // built after it (poses must build none)
   uint64_t readbacks = 0;                    // image readbacks during the frames (PNG output only)
