@@ -415,6 +415,16 @@ float cell_key(uint slot, int cell, int c) {
   return opaque_entries_upto(c, i1) - (i0 > 0 ? opaque_entries_upto(c, i0 - 1) : 0.0);
 }
 
+// Isosurface: a cell whose iso-channel maximum lies below the iso value
+// holds no sample that reaches it (windowing is monotonic; gamma's pow may
+// not be in the last ulp: a margin). Its samples change nothing that is
+// kept: the crossing is refined against a sample read again (iso_crossing).
+bool iso_cell_below(uint slot, int cell) {
+  const int c = int(P.control2.y);
+  const float x1 = vxr_normalise(P, vec4(walk_cell_range(slot, cell, c).y))[c];
+  return x1 + (VXR_SC_GAMMA && x1 > 0.0 ? 1e-5 : 0.0) < P.iso.x;
+}
+
 const bool kReduceModel = VXR_SC_MODEL == VXR_MODEL_MIP || VXR_SC_MODEL == VXR_MODEL_MINIP;
 // The brick loop searches the list for an entry with a run (see main).
 const bool kHeadSearch = VXR_SC_CELLS && !kReduceModel;
@@ -442,8 +452,12 @@ void classify_cells() {
   uint word = 0u;
   for (uint i = 0u, cell = index * 32u; i < 32u && cell < count; ++i, ++cell) {
     bool empty = true;
-    for (int c = 0; c < VXR_SC_CHANNELS; ++c)
-      if (P.window[c].w != 0.0 && !(cell_key(slot, int(cell), c) <= 0.0)) empty = false;
+    if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE) {
+      empty = iso_cell_below(slot, int(cell));
+    } else {
+      for (int c = 0; c < VXR_SC_CHANNELS; ++c)
+        if (P.window[c].w != 0.0 && !(cell_key(slot, int(cell), c) <= 0.0)) empty = false;
+    }
     if (empty) word |= 1u << i;
   }
   cell_bits[b * cell_words() + index] = word;
@@ -588,6 +602,24 @@ void walk_to_run(inout int k, inout int run_end, vec3 e, vec3 dl, float i0, floa
   }
 }
 
+// Where a ray crosses the isosurface when its sample at index i of the
+// marched brick (t, value v) is its first at or above the iso value
+// (P.control2.w): refined against the sample one step back, read again here
+// from this brick's slot (its apron of 2 voxels holds it for steps up to
+// BrickRenderer's kIsoBackStep), not carried from whatever the ray sampled
+// last. So the crossing is the same whether the cells or bricks before it
+// were marched or skipped. No sample back there (behind the eye, outside the
+// volume, the ROI or the cut): the sample itself, as in the CPU reference.
+float iso_crossing(vec3 e, vec3 dl, vec4 plane, float i, float offset, float dt, float t, float v) {
+  const float tb = (i - 1.0 + offset) * dt;  // sample i - 1's t, as the march computes it
+  const vec3 q = P.eye.xyz + tb * g_dir, lb = e + tb * dl;
+  const bool back = tb >= 0.0 && all(greaterThanEqual(q, P.region_lo.xyz)) && all(lessThanEqual(q, P.region_hi.xyz)) &&
+                    (plane.xyz == vec3(0.0) || dot(plane.xyz, lb) + plane.w >= 0.0);
+  if (!back) return t;
+  const float vb = vxr_normalise(P, vxr_sample(lb))[int(P.control2.y)];
+  return vb < P.iso.x ? tb + (P.iso.x - vb) / (v - vb) * (t - tb) : t;
+}
+
 // The ray's segment [t0, t1) inside brick b (its clip box and cut plane), in
 // t units (level-0 voxels along dir). False when it misses.
 bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
@@ -718,6 +750,7 @@ void main() {
     // first walk. Samples k .. n - 1 of the brick are left to march; a lane
     // that misses the brick has none.
     vec3 e = vec3(0.0), dl = vec3(0.0), inv_step = vec3(0.0);
+    vec4 plane = vec4(0.0);  // the brick's cut plane, for an iso crossing's sample back
     float dt = 1.0, i0 = 0.0;
     int n = 0, k = 0, run_end = 0;
     bool cells = false;
@@ -766,6 +799,7 @@ void main() {
         // wave's ray does (unpack_ray), so every dispatch mode gives one image.
         if (VXR_SC_CHANNELS == 1 && VXR_SC_MODEL == VXR_MODEL_EMISSION_ABSORPTION) ray.trans = exp(-ray.tau.x);
         e = br.eye.xyz;
+        plane = br.plane;
         set_atlas_slot(br.atlas.xyz);
         dl = dir * br.scale.xyz;
         dt = P.march.x / length(dl);  // one local step, in t units
@@ -823,7 +857,10 @@ void main() {
         else g_probe += VXR_SC_SAMPLE_WORK == VXR_SAMPLE_FETCH_ONLY ? vxr_sample(e + t * dl).x : t;
         ++taken;
         // The crossing's normal needs its brick's voxels: shade it now.
-        if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
+        if (VXR_SC_MODEL == VXR_MODEL_ISOSURFACE && ray.done) {
+          if (P.control2.w != 0u) ray.hit_t = iso_crossing(e, dl, plane, i0 + float(k), offset, dt, t, ray.prev_value);
+          ray.acc[0] = vxr_iso_shade(P, e + ray.hit_t * dl, dir, ray.hit_t);
+        }
         ++k;
         if (k >= stop || ray.done) break;
       }

@@ -301,7 +301,12 @@ TEST_CASE("brick features: empty-space skip rule per model (CPU)") {
   CHECK(may(OpticalModel::kMip, 0, 9));
   CHECK(may(OpticalModel::kMinIp, 0, 6));       // a zero lowers the minimum: never skip it
   CHECK(may(OpticalModel::kAverage, 0, 0));      // would shorten the averaged length
-  CHECK(may(OpticalModel::kIsosurface, 0, 0));   // the crossing's refinement reads the sample before it
+  // Iso (default iso value 128, step 0.5): below the iso value no sample crosses.
+  CHECK_FALSE(may(OpticalModel::kIsosurface, 0, 100));
+  CHECK(may(OpticalModel::kIsosurface, 0, 130));
+  s.step_voxels = 2.0;  // past kIsoBackStep the crossing reads the sample the ray carried: never skip
+  CHECK(may(OpticalModel::kIsosurface, 0, 100));
+  s.step_voxels = 0.5;
   // MinIP skips a brick at or above the window's top only when entry 255 is
   // transparent (a ray that took no samples must look like one that took only those).
   s.channels[0].opacity_points = {{0.0, 1.0}, {0.99, 1.0}, {1.0, 0.0}};

@@ -66,6 +66,7 @@ RenderSettings vessel_settings(OpticalModel model) {
   s.channels[0].window_hi = 200;
   s.step_voxels = 0.5;
   s.density = 0.3;
+  s.iso_value = 100;  // inside the vessels' walls
   return s;
 }
 
@@ -459,7 +460,7 @@ TEST_CASE("empty-space cells: images with skipping on and off are bit-identical 
   BrickRenderer& r = *made;
   const Camera cam = orbit_camera(r.placement(), 30, 25, 1.25);
   const OpticalModel models[] = {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
-                                 OpticalModel::kMinIp};
+                                 OpticalModel::kMinIp, OpticalModel::kIsosurface};
   const BrickPassMode modes[] = {BrickPassMode::kMultipass, BrickPassMode::kTiled};
   for (OpticalModel model : models) {
     for (BrickPassMode mode : modes) {
@@ -503,7 +504,7 @@ TEST_CASE("empty-space cells: the cell walk keeps the image for rays along the a
                         {"along y", orbit_camera(r.placement(), 90, 0)},
                         {"eye inside", orbit_camera(r.placement(), 20, 10, 0.2)}};
   for (const View& v : views) {
-    for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kMip}) {
+    for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kMip, OpticalModel::kIsosurface}) {
       const std::string what = std::string(v.what) + " " + optical_model_name(model);
       INFO(what);
       const RenderSettings s = vessel_settings(model);
@@ -582,7 +583,8 @@ TEST_CASE("empty-space cells: tiled E-A and emission frames dispatch only the 4x
   constexpr uint32_t kSide = 97;  // tiles and blocks cut by the image's edges
   constexpr uint32_t kTiles = (kSide + 7) / 8 * ((kSide + 7) / 8);
   for (const ClipView& v : clip_views(by_groups->placement())) {
-    for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip}) {
+    for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
+                               OpticalModel::kIsosurface}) {
       const RenderSettings s = vessel_settings(model);
       const BrickFrameSettings f = v.frame();
       BrickFrameStats on, off;
@@ -616,6 +618,73 @@ TEST_CASE("empty-space cells: tiled E-A and emission frames dispatch only the 4x
       MESSAGE(what);
     }
   }
+}
+
+TEST_CASE("empty-space cells: isosurface frames skip what lies below the iso value, with the same image, up to kIsoBackStep") {
+  // A crossing is refined against the sample one step back, read again in
+  // the crossing's brick, so it does not matter whether the ray marched or
+  // skipped the space before it: bricks and cells whose iso channel stays
+  // below the iso value are skipped. From outside, along an axis, from
+  // inside, with an ROI and with a cut (the sample back must lie inside all
+  // of them, as in the CPU reference), both pass modes. Past kIsoBackStep the
+  // apron no longer holds the sample back: nothing is skipped.
+  test::GpuTestScope scope;
+  auto src = sparse_vessels(128);
+  auto made = small_pool_renderer(*src);
+  BrickRenderer& r = *made;
+  for (const ClipView& v : clip_views(r.placement())) {
+    for (double step : {0.5, kIsoBackStep}) {
+      for (BrickPassMode mode : {BrickPassMode::kTiled, BrickPassMode::kMultipass}) {
+        RenderSettings s = vessel_settings(OpticalModel::kIsosurface);
+        s.step_voxels = step;
+        BrickFrameSettings f = v.frame();
+        f.mode = mode;
+        INFO(v.what << " step " << step << (mode == BrickPassMode::kTiled ? " tiled" : " multipass"));
+        check_skipping_keeps_image(r, v.cam, s, f, 97, 97);
+      }
+    }
+  }
+  // Past the step the apron holds: the same image and every sample taken.
+  RenderSettings s = vessel_settings(OpticalModel::kIsosurface);
+  s.step_voxels = 2.0;
+  const ClipView v = clip_views(r.placement())[0];
+  BrickFrameSettings f = v.frame();
+  BrickFrameStats on, off;
+  const ImageRgba8 a = converge(r, v.cam, s, f, 97, 97, &on);
+  f.lod.skip_empty = false;
+  const ImageRgba8 b = converge(r, v.cam, s, f, 97, 97, &off);
+  CHECK(test::looks_non_blank(a));
+  CHECK(a.pixels == b.pixels);
+  CHECK(on.samples == off.samples);
+  CHECK(on.lod.skipped_empty == 0);
+}
+
+TEST_CASE("empty-space cells: the iso rule for a brick's range: skipped only clearly below the iso value, and only up to kIsoBackStep") {
+  RenderSettings s;
+  s.model = OpticalModel::kIsosurface;
+  s.channels[0].window_lo = 0;
+  s.channels[0].window_hi = 200;
+  s.iso_value = 100;
+  s.step_voxels = 1.0;
+  const TransferTable t = build_transfer_table(s);
+  CHECK(iso_back_sample(s));
+  CHECK_FALSE(brick_may_contribute(s, t, 0.0, 99.0));
+  CHECK(brick_may_contribute(s, t, 0.0, 100.0));   // a sample at the iso value crosses
+  CHECK(brick_may_contribute(s, t, 0.0, 99.999));  // within rounding of it: kept
+  CHECK(brick_may_contribute(s, t, 120.0, 250.0));
+  // A gamma moves the iso value with the values: still below is below.
+  s.channels[0].gamma = 2.0;
+  CHECK_FALSE(brick_may_contribute(s, t, 0.0, 99.0));
+  CHECK(brick_may_contribute(s, t, 0.0, 101.0));
+  // An iso value at or below the window's low end: every sample crosses.
+  s.channels[0].gamma = 1.0;
+  s.iso_value = -5;
+  CHECK(brick_may_contribute(s, t, 0.0, 0.0));
+  // Past kIsoBackStep: never skipped.
+  s.iso_value = 100;
+  s.step_voxels = 2.0;
+  CHECK_FALSE(iso_back_sample(s));
+  CHECK(brick_may_contribute(s, t, 0.0, 10.0));
 }
 
 TEST_CASE("empty-space cells: a pool uses 2-voxel cells where the slots its source can fill allow, else 4") {
@@ -755,6 +824,9 @@ TEST_CASE("empty-space cells: the classification is kept while its inputs stay, 
   };
   RenderSettings mip = wide;
   mip.model = OpticalModel::kMip;
+  RenderSettings iso = vessel_settings(OpticalModel::kIsosurface);
+  RenderSettings iso_higher = iso;  // the iso value alone changes, the same bricks drawn: more cells below it
+  iso_higher.iso_value = 104;
   const Step steps[] = {{"narrow window", narrow, near_cam},
                         {"wide window", wide, near_cam},
                         {"opacity ramp", ramp, near_cam},
@@ -762,7 +834,9 @@ TEST_CASE("empty-space cells: the classification is kept while its inputs stay, 
                         {"ramp shifted", ramp_shifted, near_cam, true},
                         {"other camera", ramp_low, orbit_camera(r.placement(), 120, -10, 1.1)},
                         {"mip", mip, near_cam},
-                        {"ea after mip", wide, near_cam}};
+                        {"ea after mip", wide, near_cam},
+                        {"iso", iso, near_cam},
+                        {"iso value higher", iso_higher, near_cam, true}};
   uint64_t drawn_before = 0;
   for (const Step& step : steps) {
     INFO(std::string(step.what));

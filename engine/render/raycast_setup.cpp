@@ -76,6 +76,8 @@ shader::RaycastParams pack_params(const RaycastSetup& r, bool has_depth_image) {
   p.depth = glm::vec4(glm::dvec4(static_cast<double>(r.depth_mode), r.depth_lo, r.depth_hi, 0.0));
   p.gradient = glm::vec4(glm::dvec4(r.gradient ? 1.0 : 0.0, r.gradient_lo, r.gradient_hi, 0.0));
   p.world_opacity = v4(r.world_opacity);
+  p.region_lo = v4(glm::dvec3(0.0));  // the whole volume; a renderer with an ROI narrows it
+  p.region_hi = v4(r.dims);
   uint32_t model = VXR_MODEL_EMISSION_ABSORPTION;
   switch (r.model) {
     case OpticalModel::kEmissionAbsorption: model = VXR_MODEL_EMISSION_ABSORPTION; break;

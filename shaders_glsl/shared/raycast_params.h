@@ -48,14 +48,17 @@ struct RaycastParams {
   vec4 depth;     // x: depth-colour mode, y: view-depth at the box's nearest corner, z: at its farthest, w: unused
   vec4 gradient;  // x: gradient-magnitude opacity on (0/1), y: |g| where the factor starts rising, z: |g| where it reaches 1
   uvec4 control;  // x: model, y: image width, z: image height, w: max steps per ray
-  uvec4 control2; // x: channel blend, y: index of the iso channel, z: naive linear opacity (1) or exact (0), w: unused
+  uvec4 control2; // x: channel blend, y: index of the iso channel, z: naive linear opacity (1) or exact (0),
+                  // w: iso crossings refined against the sample a step back read in the crossing's brick (1; brick_raycast.comp)
   vec4 window[VXR_MAX_CHANNELS];  // per channel: x lo, y hi (texel units), z gamma, w 1 / (y - x) where drawn
                                   // (in float, as a shader would compute it; once, not per sample), 0 where off
   vec4 world_opacity;  // xyz: voxel size / opacity unit distance (world-unit opacity), all 0: per voxel; w: unused
+  vec4 region_lo;      // xyz: the volume's box within the ROI, voxel coordinates (as eye); w: unused
+  vec4 region_hi;
 };
 
 #ifdef __cplusplus
-static_assert(sizeof(RaycastParams) == 272, "std140 layout of RaycastParams changed: update both languages");
+static_assert(sizeof(RaycastParams) == 304, "std140 layout of RaycastParams changed: update both languages");
 }  // namespace vxr::shader
 #endif
 

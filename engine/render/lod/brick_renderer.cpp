@@ -157,11 +157,30 @@ double windowed(const ChannelSettings& c, double v) {
   const double x = std::clamp((v - c.window_lo) / (c.window_hi - c.window_lo), 0.0, 1.0);
   return c.gamma == 1.0 ? x : std::pow(x, c.gamma);
 }
+
+// The iso value windowed as plan_raycast gives it to the rays, and whether
+// windowed value x lies clearly below it (by far more than float rounding).
+double iso_windowed(const RenderSettings& s) {
+  const ChannelSettings ch = channel_settings(s, s.iso_channel);
+  const double v = std::clamp((s.iso_value - ch.window_lo) / (ch.window_hi - ch.window_lo), 0.0, 1.0);
+  return ch.gamma == 1.0 ? v : std::pow(v, ch.gamma);
+}
+bool clearly_below(double x, double iso_norm) { return x < iso_norm - 1e-4; }
 }  // namespace
 
+bool iso_back_sample(const RenderSettings& s) {
+  return s.model == OpticalModel::kIsosurface && s.step_voxels <= kIsoBackStep;
+}
+
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, std::span<const ChunkStats> ranges) {
-  // Average and iso never skip (see the header); the others test each enabled channel.
-  if (s.model == OpticalModel::kAverage || s.model == OpticalModel::kIsosurface) return true;
+  // Average never skips (see the header); iso tests its channel; the others each enabled channel.
+  if (s.model == OpticalModel::kAverage) return true;
+  if (s.model == OpticalModel::kIsosurface) {
+    if (!iso_back_sample(s) || s.iso_channel >= ranges.size() || s.iso_channel >= s.channels.size()) return true;
+    const ChannelSettings& ch = s.channels[s.iso_channel];
+    return !ch.enabled ? !clearly_below(0.0, iso_windowed(s))  // the rays see a channel not drawn as 0
+                       : !clearly_below(windowed(ch, ranges[s.iso_channel].max), iso_windowed(s));
+  }
   const int n = VXR_TF_SIZE - 1;
   for (size_t c = 0; c < ranges.size() && c < s.channels.size(); ++c) {
     const ChannelSettings& ch = s.channels[c];
@@ -204,6 +223,13 @@ CellOpacity::CellOpacity(const RenderSettings& s, const TransferTable& table, co
   };
   model_ = s.model;
   mix(&model_, sizeof(model_));
+  if (iso_back_sample(s)) {
+    iso_skips_ = true;
+    iso_channel_ = s.iso_channel;
+    iso_norm_ = iso_windowed(s);
+    mix(&iso_channel_, sizeof(iso_channel_));
+    mix(&iso_norm_, sizeof(iso_norm_));
+  }
   for (size_t c = 0; c < value_scales.size(); ++c) {
     Channel ch;
     if (c < s.channels.size()) {
@@ -223,6 +249,14 @@ CellOpacity::CellOpacity(const RenderSettings& s, const TransferTable& table, co
 
 bool CellOpacity::may_contribute(uint32_t channel, glm::vec2 texel_range) const {
   const Channel& ch = channels_[channel];
+  if (model_ == OpticalModel::kIsosurface) {
+    // Only the iso channel's crossings end a ray; a cell it is clearly below holds none.
+    if (!iso_skips_) return true;
+    if (channel != iso_channel_) return false;
+    const double x = ch.enabled ? (texel_range.y * ch.scale - ch.lo) / (ch.hi - ch.lo) : 0.0;
+    const double w = std::clamp(x, 0.0, 1.0);
+    return !clearly_below(ch.gamma == 1.0 ? w : std::pow(w, ch.gamma), iso_norm_);
+  }
   if (!ch.enabled) return false;
   // The lookup at u = x * 255 mixes entries floor(u) and floor(u) + 1 (the
   // latter with weight 0 at an integer u). The shader's float u lies within
@@ -814,6 +848,15 @@ bool BrickRenderer::clears_tiled_view(const RenderTarget& target, uint32_t w, ui
   return !direct || (at.x == 0 && at.y == 0 && w == target.extent.width && h == target.extent.height);
 }
 
+bool BrickRenderer::iso_skips(const RenderSettings& s) const { return iso_back_sample(s) && pool_->apron() >= 2; }
+
+void BrickRenderer::set_iso_back(shader::RaycastParams& params, const RenderSettings& s, const RoiBox& roi) const {
+  params.control2.w = iso_skips(s) ? 1u : 0u;
+  if (!roi.enabled) return;  // pack_params' region: the whole volume
+  params.region_lo = glm::vec4(glm::max(glm::dvec3(params.region_lo), roi.lo), 0.0f);
+  params.region_hi = glm::vec4(glm::min(glm::dvec3(params.region_hi), roi.hi), 0.0f);
+}
+
 Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
                                   uint32_t w, uint32_t h, uint32_t bricks, uint64_t records, const AtlasReads& atlas,
                                   BrickPassMode mode, const WorkSpans& spans, const RenderTarget& target,
@@ -840,7 +883,8 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                              (direct ? 0u : VXR_BRICK_FINAL_FLOAT);
   shader::BrickCastParams p{};
   // Empty-space cells: for the models whose empty samples change nothing
-  // (average counts every length, iso refines against the previous sample).
+  // (average counts every length; iso where its crossings read their sample
+  // back again, iso_skips).
   // MIP / MinIP test a cell against the ray's running value, so each cell
   // costs a walk; they pay from 8 samples a cell (4-voxel cells: step 0.5).
   // MRI MIP (`vxr render assets/mri-stack/volume.json --model mip --window
@@ -850,8 +894,9 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   // at step 2, 3.9 / 3.7 at 1, 4.4 / 6.9 at 0.5.
   const bool reduce = model == VXR_MODEL_MIP || model == VXR_MODEL_MINIP;
   const BrickCells walk = walk_cells(pool_->cells(), reduce || cell_walk == CellWalk::kGroups);
-  const bool cells = cell_walk != CellWalk::kOff && (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION ||
-                                    (reduce && walk.cell_size >= 8.0 * s.step_voxels));
+  const bool cells = cell_walk != CellWalk::kOff &&
+                     (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION ||
+                      (model == VXR_MODEL_ISOSURFACE && iso_skips(s)) || (reduce && walk.cell_size >= 8.0 * s.step_voxels));
   const uint32_t cells_per_axis = cells ? walk.cells_per_axis : 0u;
   if (!cells && stats) stats->bricks_walked = 0;  // record_view counted the bricks that would walk
   if (stats) stats->hue_lookups = hue_lookups(model);
@@ -1548,6 +1593,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   LodQueries q;
   ChunkStats ranges[VXR_MAX_CHANNELS];
   q.visible = [&](const ChunkKey& key) {
+    if (s.model == OpticalModel::kIsosurface && !iso_skips(s)) return true;
     for (uint32_t c = 0; c < channels(); ++c) {
       ChunkKey k = key;
       k.channel = pool_->source_channel(c);
@@ -1573,10 +1619,11 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
                                                                sizeof(shader::BrickRecord)) +
                         " (of " + std::to_string(opt_.max_bricks) + "); raise the LOD bias or max_bricks");
   // Where skipping jumps empty cells, rays march only the box of a brick's
-  // kept cells (every model but average and iso), and the work lists cover
-  // only its screen rectangle: the same image, without the empty margin.
+  // kept cells (every model but average, and iso where iso_skips), and the
+  // work lists cover only its screen rectangle: the same image, without the
+  // empty margin.
   const bool skip_cells = frame.lod.skip_empty && frame.skip_cells;
-  const bool boxes = s.model != OpticalModel::kAverage && s.model != OpticalModel::kIsosurface;
+  const bool boxes = s.model != OpticalModel::kAverage && (s.model != OpticalModel::kIsosurface || iso_skips(s));
   std::optional<CellOpacity> cell_opacity;
   if (skip_cells && boxes) cell_opacity.emplace(s, tf, value_scales_);
   std::vector<BrickBox>& march_world = march_world_;  // reused: no allocation per view once sizes settle
@@ -1639,7 +1686,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   // as: E-A and emission rays that meet only empty cells, in a view that
   // record_cast clears first.
   const bool by_groups = opt_.group_lists && skip_cells && ctx_.info().subgroup_size == 8 &&
-                         (s.model == OpticalModel::kEmissionAbsorption || s.model == OpticalModel::kEmission) &&
+                         (s.model == OpticalModel::kEmissionAbsorption || s.model == OpticalModel::kEmission ||
+                          (s.model == OpticalModel::kIsosurface && iso_skips(s))) &&
                          clears_tiled_view(target, width, height);
   auto build_work = [&]() -> Status {
     items_capacity = items_base < items_.size ? (items_.size - items_base) / sizeof(glm::uvec4) : 0;
@@ -1673,6 +1721,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
       pack_params(plan_raycast(camera, s, placement(), value_scales_, ax.full, ay.full), false);
   params.control.y = width;  // the rays dispatched (the warped grid's)
   params.control.z = height;
+  set_iso_back(params, s, frame.lod.roi);
   const VkDeviceSize params_offset = VkDeviceSize(views_) * params_stride_;
   std::memcpy(static_cast<uint8_t*>(params_.mapped) + params_offset, &params, sizeof(params));
 
@@ -1708,6 +1757,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     for (const ChunkKey& key : lod.draw) classify.records.emplace_back(key, pool_->slot_of(key));
     std::copy(std::begin(params.window), std::end(params.window), classify.window.begin());
     classify.table.assign(tf.rgba.begin(), tf.rgba.end());
+    classify.iso = s.model == OpticalModel::kIsosurface ? glm::vec2(params.iso.x, float(params.control2.y)) : glm::vec2(0.0f);
     classify.bits_offset = bits_base;
     classify.bits_bytes = bits_bytes;
     const double skipped = double(split) * pool_->cells().cell_size / s.step_voxels;
@@ -1959,8 +2009,8 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
   }
   BrickFrameStats st;
   st.lod.drawn = 1;
-  const shader::RaycastParams params =
-      pack_params(plan_raycast(camera, s, placement(), value_scales_, width, height), false);
+  shader::RaycastParams params = pack_params(plan_raycast(camera, s, placement(), value_scales_, width, height), false);
+  set_iso_back(params, s, clip.roi);
   const RenderTarget target{target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL};
   Status recorded = Status::ok();
   const auto t0 = std::chrono::steady_clock::now();

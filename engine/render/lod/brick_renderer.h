@@ -172,19 +172,31 @@ Status check_brick_settings(const RenderSettings& s, uint32_t channels = 1);
 //  - minip: the mirror image: every range at or above the window's high end
 //    (windowed 1 never lowers the running minimum) and entry 255 transparent.
 //  - average: never (a skipped brick would shorten the length averaged over).
-//  - iso: never (a crossing just past a skipped brick is refined against the
-//    sample before it, which lies in that brick).
+//  - iso: the iso channel's range reaches the iso value (below it no sample
+//    can cross), where iso_back_sample holds; otherwise never (a crossing is
+//    then refined against the sample the ray carried, which a skip would lose).
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, std::span<const ChunkStats> ranges);
 // One channel: ranges = {[lo, hi]}.
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, double lo, double hi);
+
+// The longest step (voxels of the marched level) at which an isosurface
+// crossing is refined against the sample one step back read again from the
+// crossing's brick (brick_raycast.comp iso_crossing): the atlas slots' apron
+// of 2 voxels holds it. Then the crossing does not depend on what the ray
+// marched before it, so iso skips empty bricks and cells like the other
+// models, with the same image. At longer steps a crossing is refined against
+// the sample the ray carried (across bricks), and iso skips nothing.
+constexpr double kIsoBackStep = 1.5;
+bool iso_back_sample(const RenderSettings& s);
 
 // Whether an empty-space cell may change a ray, whatever the ray holds so
 // far: for emission and emission-absorption (whose zero-opacity samples
 // change nothing) the classify pass's test on the CPU, in double and one
 // table entry wider each side, so that a cell it calls empty the shader's
 // float test calls empty too; for MIP / MinIP brick_may_contribute's rule per
-// cell (clearly below / above the window, entry 0 / 255 transparent); other
-// models keep every cell. Marching only the box of the cells it keeps
+// cell (clearly below / above the window, entry 0 / 255 transparent); for iso
+// (where iso_back_sample holds) the iso channel clearly below the iso value;
+// other models keep every cell. Marching only the box of the cells it keeps
 // (BrickRenderer::march_box) then gives the image of marching them all.
 class CellOpacity {
  public:
@@ -203,6 +215,9 @@ class CellOpacity {
     std::array<uint16_t, VXR_TF_SIZE> opaque_upto{};  // entries 0..i with non-zero opacity
   };
   OpticalModel model_ = OpticalModel::kEmissionAbsorption;
+  bool iso_skips_ = false;  // iso: iso_back_sample
+  uint32_t iso_channel_ = 0;
+  double iso_norm_ = 0;  // the iso value windowed, as the rays compare it
   std::vector<Channel> channels_;
   uint64_t hash_ = 0;
 };
@@ -413,14 +428,15 @@ class BrickRenderer final : public VolumeRenderer {
     std::vector<std::pair<ChunkKey, uint32_t>> records;  // per brick record: its key and slot (the ranges read)
     std::array<glm::vec4, VXR_MAX_CHANNELS> window{};   // RaycastParams::window
     std::vector<glm::vec4> table;                         // the transfer table
+    glm::vec2 iso{0.0f};                                  // iso: RaycastParams::iso.x and the iso channel
     uint32_t model = 0, walked_cells = 0, range_cells = 0;
     uint64_t bits_offset = 0, bits_bytes = 0;  // the view's region of cell_bits_
     bool operator==(const CellClassInputs&) const = default;
     bool writes_keys() const { return model == VXR_MODEL_MIP || model == VXR_MODEL_MINIP; }
     // Keys written under these settings equal those of `o` for any slot both read.
     bool same_keys(const CellClassInputs& o) const {
-      return window == o.window && table == o.table && model == o.model && walked_cells == o.walked_cells &&
-             range_cells == o.range_cells;
+      return window == o.window && table == o.table && iso == o.iso && model == o.model &&
+             walked_cells == o.walked_cells && range_cells == o.range_cells;
     }
   };
   // Forgets what this view's pass overwrites for the other views: their bits
@@ -471,6 +487,11 @@ class BrickRenderer final : public VolumeRenderer {
   // `by_groups`: the tiles with a brick that walks also as the 4x2 blocks
   // (spans->marched_groups) whose rays can meet a brick's screen rectangle
   // or, where it has them, one of its blocks (TileFrusta::group_meets).
+  // Whether this view's iso crossings read their sample back in their brick
+  // (iso_back_sample, with the slots' apron of 2), so iso skips empty space.
+  bool iso_skips(const RenderSettings& s) const;
+  // The view's parameters for iso_crossing: the flag and the region (volume within the ROI).
+  void set_iso_back(shader::RaycastParams& params, const RenderSettings& s, const RoiBox& roi) const;
   Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                           const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
                           const LodView& view, const WarpAxis& ax, const WarpAxis& ay, bool by_groups,
