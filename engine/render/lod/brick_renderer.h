@@ -475,6 +475,11 @@ class BrickRenderer final : public VolumeRenderer {
   // Whether a tiled view's image is its own (or the accumulation image's)
   // and has no underlay, so one clear can write its empty rays' pixels.
   bool clears_tiled_view(const RenderTarget& target, uint32_t w, uint32_t h) const;
+  // Whether this view's iso crossings read their sample back in their brick
+  // (iso_back_sample, with the slots' apron of 2), so iso skips empty space.
+  bool iso_skips(const RenderSettings& s) const;
+  // The view's parameters for iso_crossing: the flag and the region (volume within the ROI).
+  void set_iso_back(shader::RaycastParams& params, const RenderSettings& s, const RoiBox& roi) const;
   // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen
   // rectangle touches it; then the tiles with a brick that walks (`walks`,
   // per drawn brick), those with bricks that do not, and those without
@@ -487,11 +492,6 @@ class BrickRenderer final : public VolumeRenderer {
   // `by_groups`: the tiles with a brick that walks also as the 4x2 blocks
   // (spans->marched_groups) whose rays can meet a brick's screen rectangle
   // or, where it has them, one of its blocks (TileFrusta::group_meets).
-  // Whether this view's iso crossings read their sample back in their brick
-  // (iso_back_sample, with the slots' apron of 2), so iso skips empty space.
-  bool iso_skips(const RenderSettings& s) const;
-  // The view's parameters for iso_crossing: the flag and the region (volume within the ROI).
-  void set_iso_back(shader::RaycastParams& params, const RenderSettings& s, const RoiBox& roi) const;
   Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                           const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
                           const LodView& view, const WarpAxis& ax, const WarpAxis& ay, bool by_groups,
