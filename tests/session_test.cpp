@@ -109,6 +109,23 @@ TEST_CASE("session: defaults, --channel and --settings resolve the same settings
   CHECK(s.settings.model == OpticalModel::kMinIp);
   CHECK(s.settings.channels[0].colormap == "gray");
 
+  // --iso V: the isosurface at V, and the iso model unless --model says
+  // otherwise; without it the iso value is the window's middle.
+  SessionFlags iso;
+  iso.iso = "42.5";
+  s = open_ok(iso);
+  CHECK(s.settings.model == OpticalModel::kIsosurface);
+  CHECK(s.settings.iso_value == 42.5);
+  CHECK(dense_settings(iso, &dense_channels) == s.settings);
+  iso.model = "mip";
+  s = open_ok(iso);
+  CHECK(s.settings.model == OpticalModel::kMip);
+  CHECK(s.settings.iso_value == 42.5);
+  SessionFlags iso_model;
+  iso_model.model = "iso";
+  s = open_ok(iso_model);
+  CHECK(s.settings.iso_value == 0.5 * (s.settings.channels[0].window_lo + s.settings.channels[0].window_hi));
+
   // A Scene's channels and timepoint are choices too; --channel wins over them.
   const fs::path scene = dir / "scene.json";
   write_text(scene, R"({"channels": [2], "timepoint": 0, "render": {"model": "average"}})");
@@ -135,6 +152,12 @@ TEST_CASE("session: defaults, --channel and --settings resolve the same settings
   r = open_volume_session(kThreeChannels, bad);
   REQUIRE(!r.is_ok());
   CHECK(r.status().message().find("--timepoint: 1, but " + kThreeChannels + " has 1 timepoint(s)") == 0);
+  SessionFlags bad_iso;
+  bad_iso.iso = "high";
+  r = open_volume_session(kThreeChannels, bad_iso, &step);
+  REQUIRE(!r.is_ok());
+  CHECK(step == SessionStep::kSettings);
+  CHECK(r.status().message() == "--iso: expected one number (data units), got 'high'");
   SessionFlags missing;
   missing.settings = (dir / "nowhere.json").string();
   r = open_volume_session(kThreeChannels, missing, &step);

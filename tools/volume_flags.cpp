@@ -25,6 +25,9 @@ void add_session_flags(CLI::App* cmd, SessionFlags* f) {
                   "magenta, yellow (default: hot; a distinct colour per channel when several are drawn)");
   cmd->add_option("--window", f->window, "LO,HI: channel 0's window in data units (default: 0.5..99.5 percentiles of each drawn channel)");
   cmd->add_option("--step", f->step, "sample step in voxels (default 0.5)");
+  cmd->add_option("--iso", f->iso,
+                  "V: draw the isosurface at V (data units of the iso channel); implies --model iso unless --model is given "
+                  "(default value: the middle of the window)");
   cmd->add_option("--channel", f->channel, "channels to draw, e.g. 2 or 0,2 (default: the first up to 4)");
   cmd->add_option("--timepoint", f->timepoint, "timepoint to draw (default 0)");
   add_volume_flags(cmd, f);

@@ -8,7 +8,7 @@
 
 namespace vxr::cli {
 
-// --settings --model --colormap --window --step --channel --timepoint
+// --settings --model --colormap --window --step --iso --channel --timepoint
 // --voxel-size --opacity --opacity-unit-distance into `f`. Call note_session_flags(cmd, f) in the
 // command's callback (it records which were given).
 void add_session_flags(CLI::App* cmd, SessionFlags* f);

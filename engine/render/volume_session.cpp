@@ -31,7 +31,14 @@ bool parse_pair(const std::string& text, double* first, double* second) {
   return !b.empty() && *end == '\0' && std::isfinite(*second);
 }
 
-// --model --colormap --window --step over the start's settings (channel 0's colour and window).
+// "X" -> X when the whole text is one finite number.
+bool parse_number(const std::string& text, double* out) {
+  char* end = nullptr;
+  *out = std::strtod(text.c_str(), &end);
+  return !text.empty() && *end == '\0' && std::isfinite(*out);
+}
+
+// --model --colormap --window --step --iso over the start's settings (channel 0's colour and window).
 Status apply_flags(const SessionFlags& f, SettingsChoice& c) {
   RenderSettings& s = c.settings;
   if (!f.model.empty() && !optical_model_from_name(f.model, &s.model))
@@ -48,6 +55,12 @@ Status apply_flags(const SessionFlags& f, SettingsChoice& c) {
   }
   if (f.step != 0.0) s.step_voxels = f.step;
   if (!(s.step_voxels > 0.0) || !std::isfinite(s.step_voxels)) return invalid_argument("--step: must be > 0 voxels");
+  if (!f.iso.empty()) {
+    if (!parse_number(f.iso, &s.iso_value))
+      return invalid_argument("--iso: expected one number (data units), got '" + f.iso + "'");
+    if (f.model.empty()) s.model = OpticalModel::kIsosurface;
+    c.iso_given = true;
+  }
   return Status::ok();
 }
 
@@ -69,13 +82,6 @@ class VoxelSizeSource final : public ChunkSource {
   std::shared_ptr<const ChunkSource> inner_;
   VolumeInfo info_;
 };
-
-// "X" -> X when the whole text is one finite number.
-bool parse_number(const std::string& text, double* out) {
-  char* end = nullptr;
-  *out = std::strtod(text.c_str(), &end);
-  return !text.empty() && *end == '\0' && std::isfinite(*out);
-}
 
 std::string dims_text(const VolumeInfo& i) {
   return std::string(dtype_name(i.dtype)) + " " + std::to_string(i.dims[0]) + "x" + std::to_string(i.dims[1]) + "x" +
@@ -285,7 +291,7 @@ Result<DrawnSettings> resolve_drawn_settings(SettingsChoice choice, const Sessio
     s.channels[c].window_lo = w.first;
     s.channels[c].window_hi = w.second;
   }
-  if (s.iso_value == RenderSettings{}.iso_value && !choice.window_given)
+  if (s.iso_value == RenderSettings{}.iso_value && !choice.window_given && !choice.iso_given)
     s.iso_value = 0.5 * (s.channels[0].window_lo + s.channels[0].window_hi);
   VXR_RETURN_IF_ERROR(validate_render_settings(s, static_cast<uint32_t>(n)));
   out.settings = std::move(s);

@@ -45,6 +45,7 @@ struct SessionFlags {
   std::string window;     // "LO,HI" in data units; empty: from the data (percentiles) or the source's default
   std::string model;      // optical model name; empty: emission-absorption
   double step = 0.0;      // voxels per sample; 0: the default (0.5)
+  std::string iso;        // "V": the isosurface at V (data units), and --model iso unless --model says otherwise; empty: the settings'
   // Shared by vxr view and vxr render (parse_volume_flags, apply_opacity_flags):
   std::string voxel_size;             // "X,Y,Z" world units per voxel, overriding the file's; empty: the file's
   std::string opacity;                // "LO:A,HI:B" opacity ramp over the window (fractions 0..1); empty: none
@@ -78,6 +79,7 @@ struct SettingsChoice {
   RenderSettings settings;
   bool window_given = false;    // by --window, the file or the card: no window from the data
   bool colormap_given = false;  // by --colormap
+  bool iso_given = false;       // by --iso: no iso value from the window
   bool defaults = true;         // no file or card: a colour per channel when there are several
 };
 Result<SettingsChoice> choose_settings(const SessionFlags& flags);
