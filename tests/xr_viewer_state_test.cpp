@@ -12,6 +12,7 @@
 #include <GLFW/glfw3.h>
 
 #include <imgui.h>
+#include <imgui_internal.h>  // ImGui::FindWindowByName: a panel's content height
 
 #include "annotate/annotation_store.h"
 #include "render/volume_renderer.h"
@@ -275,6 +276,7 @@ TEST_CASE("viewer state: script commands drive the same edits and bad lines are 
   REQUIRE(v.apply_command("window 0 10 200").is_ok());
   REQUIRE(v.apply_command("model mip").is_ok());
   REQUIRE(v.apply_command("step 0.125").is_ok());
+  REQUIRE(v.apply_command("iso 87.5").is_ok());
   REQUIRE(v.apply_command("time 1").is_ok());
   REQUIRE(v.apply_command("visible 0 off").is_ok());
   REQUIRE(v.apply_command("  # a comment").is_ok());
@@ -283,11 +285,12 @@ TEST_CASE("viewer state: script commands drive the same edits and bad lines are 
   CHECK(v.render().channels[0].window_hi == 200);
   CHECK(v.render().model == OpticalModel::kMip);
   CHECK(v.render().step_voxels == 0.125);
+  CHECK(v.render().iso_value == 87.5);
   CHECK(v.scene().timepoint == 1);
   CHECK_FALSE(v.render().channels[0].enabled);
   const Scene before = v.scene();
   for (const char* line : {"window 0 10", "window 0 x 3", "colormap 0 nope", "model fancy", "frobnicate 1",
-                           "time -1", "view 4", "visible 0 maybe", "step 1e999"}) {
+                           "time -1", "view 4", "visible 0 maybe", "step 1e999", "iso", "iso high", "iso 1e999"}) {
     const Status s = v.apply_command(line);
     CAPTURE(line);
     CHECK(s.code() == ErrorCode::kInvalidArgument);
@@ -373,6 +376,20 @@ TEST_CASE("viewer panels: draw without touching the state, the help panel adds, 
   panel_vertices(v);  // a new auto-sized window stays hidden for its first frame
   const int with_help = panel_vertices(v);
   CHECK(with_help > panels);
+  // The isosurface adds its value's slider to the Rendering panel (a row
+  // more of content; the panel may clip it), and drawing it changes nothing.
+  auto rendering_height = [&] {
+    panel_vertices(v);  // a window's content size is the last frame's
+    panel_vertices(v);
+    return ImGui::FindWindowByName("Rendering")->ContentSize.y;
+  };
+  v.set_model(OpticalModel::kAverage);
+  const float average = rendering_height();
+  v.set_model(OpticalModel::kIsosurface);
+  const uint64_t r1 = v.revision();
+  const float iso = rendering_height();
+  CHECK(iso >= average + ImGui::GetFrameHeight());
+  CHECK(v.revision() == r1);
   v.handle_key(ViewerKey::kToggleUi);
   CHECK(panel_vertices(v) == 0);
   ImGui::DestroyContext(ctx);

@@ -250,7 +250,7 @@ Status ViewCommand::build_viewer_setup() {
   setup->view_memory = remembered_view_path(o_.input);
   const SessionFlags& f = o_.flags;
   const bool look_given = !o_.card.empty() || !f.settings.empty() || !f.colormap.empty() || !f.window.empty() ||
-                          !f.model.empty() || f.step != 0.0 || !f.channel.empty() || f.timepoint_given ||
+                          !f.model.empty() || f.step != 0.0 || !f.iso.empty() || !f.channel.empty() || f.timepoint_given ||
                           !f.opacity.empty() || !f.opacity_unit_distance.empty() || !f.voxel_size.empty();
   setup->restore_view = !look_given;
   req_.viewer = std::move(setup);

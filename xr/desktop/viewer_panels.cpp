@@ -169,6 +169,12 @@ void render_panel(ViewerState& state) {
   float density = static_cast<float>(state.render().density);
   if (ImGui::SliderFloat("density", &density, 0.001f, 10.0f, "%.3f", ImGuiSliderFlags_Logarithmic))
     (void)state.set_density(density);
+  if (state.render().model == OpticalModel::kIsosurface) {  // the surface's value, over the data's range
+    const auto range = state.data_range();
+    float iso = static_cast<float>(state.render().iso_value);
+    if (ImGui::SliderFloat("iso value", &iso, static_cast<float>(range[0]), static_cast<float>(range[1]), "%.4g"))
+      (void)state.set_iso_value(iso);
+  }
   clip_panel(state);
   if (state.timepoints() > 1) {
     int t = static_cast<int>(state.scene().timepoint);

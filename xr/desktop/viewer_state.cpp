@@ -375,6 +375,15 @@ Status ViewerState::set_density(double density) {
   return Status::ok();
 }
 
+Status ViewerState::set_iso_value(double value) {
+  if (!std::isfinite(value)) return invalid_argument("iso value must be a finite number");
+  if (scene_.render.iso_value != value) {
+    scene_.render.iso_value = value;
+    changed();
+  }
+  return Status::ok();
+}
+
 Status ViewerState::set_timepoint(uint32_t t) {
   if (t >= timepoints_)
     return out_of_range("timepoint " + std::to_string(t) + " does not exist (" + std::to_string(timepoints_) +
@@ -588,6 +597,10 @@ Status ViewerState::apply_command(const std::string& line) {
   if (cmd == "density") {
     if (!need(1) || !parse_double(w[1], &a)) return bad("usage: density D");
     return wrap(set_density(a));
+  }
+  if (cmd == "iso") {
+    if (!need(1) || !parse_double(w[1], &a)) return bad("usage: iso VALUE (data units)");
+    return wrap(set_iso_value(a));
   }
   if (cmd == "time") {
     if (!need(1) || !parse_index(w[1], &ch)) return bad("usage: time T");

@@ -101,6 +101,8 @@ class ViewerState {
   void cycle_model(int direction);
   Status set_step(double step_voxels);
   Status set_density(double density);
+  // The isosurface's value (RenderSettings::iso_value, data units of the iso channel).
+  Status set_iso_value(double value);
   // Shows timepoint t (pauses playback).
   Status set_timepoint(uint32_t t);
 
