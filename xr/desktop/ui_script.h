@@ -3,7 +3,8 @@
 // run one frame apart, in order; the window closes after the last one.
 //
 //   any viewer command        "colormap 0 viridis", "window 0 10 200", "visible 1 off",
-//                             "model mip", "step 0.5", "time 2", "orbit 40 0", "zoom 2",
+//                             "model mip", "step 0.5", "iso 120" (the isosurface's value, data
+//                             units), "time 2", "orbit 40 0", "zoom 2",
 //                             "reset", "view 3", "play", "pause", "speed 0.5", "loop on",
 //                             "opacity 0 0:0,0.5:0.2,1:1" (the opacity curve over the window,
 //                             x:opacity pairs, x rising in 0..1), "opacity 0 ramp" (no points),
