@@ -4,7 +4,8 @@
 //   relative viewpoint (same screen coverage), converged, LOD by angular
 //   resolution: frame time and samples should stay about constant.
 // skip: a ~10% occupied 256^3 volume at full resolution, empty-space skipping
-//   on vs off: speedup, sample ratio, identical images.
+//   on vs off: speedup, sample ratio, identical images; skip_models: the same
+//   for each optical model (skip_models_identical: every image the same).
 // paged_vs_monolithic: the same 256^3 at full resolution through the brick
 //   pool vs one 3D texture, same shader: time ratio and max abs difference.
 // passes: single pass over the brick table vs the paper's multipass (one
@@ -60,10 +61,11 @@ Result<std::unique_ptr<ProceduralSource>> source(uint64_t side, uint32_t chunk =
 }
 
 // Converges (uploads until nothing is missing), then times `repeats` frames.
-Result<Case> measure(BrickRenderer& r, const Camera& cam, const BrickFrameSettings& f, uint32_t size, int repeats) {
+Result<Case> measure(BrickRenderer& r, const Camera& cam, const BrickFrameSettings& f, uint32_t size, int repeats,
+                     const RenderSettings& s = vessel_settings()) {
   Case c;
   for (int i = 0;; ++i) {
-    auto img = r.render(cam, vessel_settings(), f, size, size, &c.stats);
+    auto img = r.render(cam, s, f, size, size, &c.stats);
     if (!img) return img.status();
     if (c.stats.lod.missing == 0) break;
     if (i > 200) return internal_error("bench lod: the view did not converge in 200 frames");
@@ -72,7 +74,7 @@ Result<Case> measure(BrickRenderer& r, const Camera& cam, const BrickFrameSettin
   c.ms = median_ms(
       repeats,
       [&] {
-        auto img = r.render(cam, vessel_settings(), f, size, size, &c.stats);
+        auto img = r.render(cam, s, f, size, size, &c.stats);
         if (!img) return img.status();
         c.image = std::move(*img);
         return Status::ok();
@@ -157,6 +159,36 @@ int run(const Options& o) {
                    {"ms_off", off_c->ms}};
     std::printf("skip on : %.2f ms  %s\nskip off: %.2f ms  %s\n", on_c->ms, format_stats(on_c->stats).c_str(),
                 off_c->ms, format_stats(off_c->stats).c_str());
+
+    // --- skip per model: what skipping buys each optical model, with the
+    // same image (average skips nothing: a skipped brick would shorten the
+    // length it averages over).
+    nlohmann::json models = nlohmann::json::object();
+    bool all_identical = true;
+    for (OpticalModel m : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
+                           OpticalModel::kMinIp, OpticalModel::kAverage, OpticalModel::kIsosurface}) {
+      RenderSettings s = vessel_settings();
+      s.model = m;
+      if (m == OpticalModel::kMinIp) s.channels[0].window_lo = 0;  // the minimum is not the background's
+      s.iso_value = 100;                                             // inside the vessels' walls
+      auto m_on = measure(**r, cam, full, o.size, o.common.repeats, s);
+      if (!m_on) return fail(m_on.status());
+      auto m_off = measure(**r, cam, off, o.size, o.common.repeats, s);
+      if (!m_off) return fail(m_off.status());
+      const bool identical = m_on->image.pixels == m_off->image.pixels;
+      all_identical = all_identical && identical;
+      models[optical_model_name(m)] = {{"speedup", m_off->ms / m_on->ms},
+                                       {"sample_ratio", double(m_off->stats.samples) / double(std::max<uint64_t>(m_on->stats.samples, 1))},
+                                       {"identical", identical},
+                                       {"ms_on", m_on->ms},
+                                       {"ms_off", m_off->ms}};
+      std::printf("skip %-9s on %8.2f ms, off %8.2f ms: %6.1fx, %7.1fx fewer samples, %s\n", optical_model_name(m),
+                  m_on->ms, m_off->ms, m_off->ms / m_on->ms,
+                  double(m_off->stats.samples) / double(std::max<uint64_t>(m_on->stats.samples, 1)),
+                  identical ? "same image" : "IMAGES DIFFER");
+    }
+    doc["skip_models"] = models;
+    doc["skip_models_identical"] = all_identical;
 
     // --- paged vs monolithic (skipping off on both: the same work). Frames
     // alternate so that both see the same machine load; medians of each.
