@@ -177,15 +177,12 @@ int run(const Options& o) {
       if (!m_off) return fail(m_off.status());
       const bool identical = m_on->image.pixels == m_off->image.pixels;
       all_identical = all_identical && identical;
-      models[optical_model_name(m)] = {{"speedup", m_off->ms / m_on->ms},
-                                       {"sample_ratio", double(m_off->stats.samples) / double(std::max<uint64_t>(m_on->stats.samples, 1))},
-                                       {"identical", identical},
-                                       {"ms_on", m_on->ms},
-                                       {"ms_off", m_off->ms}};
+      const double speedup = m_off->ms / m_on->ms;
+      const double sample_ratio = double(m_off->stats.samples) / double(std::max<uint64_t>(m_on->stats.samples, 1));
+      models[optical_model_name(m)] = {{"speedup", speedup}, {"sample_ratio", sample_ratio}, {"identical", identical},
+                                       {"ms_on", m_on->ms},  {"ms_off", m_off->ms}};
       std::printf("skip %-9s on %8.2f ms, off %8.2f ms: %6.1fx, %7.1fx fewer samples, %s\n", optical_model_name(m),
-                  m_on->ms, m_off->ms, m_off->ms / m_on->ms,
-                  double(m_off->stats.samples) / double(std::max<uint64_t>(m_on->stats.samples, 1)),
-                  identical ? "same image" : "IMAGES DIFFER");
+                  m_on->ms, m_off->ms, speedup, sample_ratio, identical ? "same image" : "IMAGES DIFFER");
     }
     doc["skip_models"] = models;
     doc["skip_models_identical"] = all_identical;
