@@ -205,6 +205,9 @@ class CellOpacity {
   // `texel_range`: one channel's (min, max) of a cell, atlas texel units (BrickPool cell ranges).
   bool may_contribute(uint32_t channel, glm::vec2 texel_range) const;
   uint32_t channels() const { return static_cast<uint32_t>(channels_.size()); }
+  OpticalModel model() const { return model_; }
+  // Channel `channel`'s texel value windowed as the rays window it (0..1, gamma applied).
+  double windowed(uint32_t channel, double texel) const;
   // Equal for settings that classify every cell alike (what a cached box is keyed by); never 0.
   uint64_t hash() const { return hash_; }
 
@@ -398,11 +401,16 @@ class BrickRenderer final : public VolumeRenderer {
   // its cells that `cells` says may change a ray. Empty
   // (lo >= hi on an axis) when no cell may.
   // With `cells`, `facts` (if given) says what a walk through them would meet.
+  static constexpr uint32_t kMinIpBins = 32;
   struct CellFacts {
     // Empty cells in 2x2x2 groups that keep some cell: what walking cells instead of groups could skip.
     uint32_t split = 0;
     uint32_t boxed_groups = 0;  // groups meeting the box of kept cells (what a walk may cross)
     bool all_kept = false;      // every cell in the box is kept: a walk would find no empty cell
+    // One-channel MinIP (see record_view): the lowest windowed maximum of
+    // any cell, and the cells by windowed minimum in kMinIpBins bins over 0..1.
+    float lowest_max = 1.0f;
+    std::array<uint32_t, kMinIpBins> minima{};
   };
   // `blocks` (with `cells`; else null): the kept cells' boxes in blocks of
   // kBlockCells^3 cells, each the tight box of the block's kept cells
@@ -475,6 +483,8 @@ class BrickRenderer final : public VolumeRenderer {
   // Whether a tiled view's image is its own (or the accumulation image's)
   // and has no underlay, so one clear can write its empty rays' pixels.
   bool clears_tiled_view(const RenderTarget& target, uint32_t w, uint32_t h) const;
+  // One-channel MinIP: whether walking the view's cells can pay (facts summed over its walked bricks).
+  static bool minip_walk_pays(const CellFacts& f);
   // Whether this view's iso crossings read their sample back in their brick
   // (iso_back_sample, with the slots' apron of 2), so iso skips empty space.
   bool iso_skips(const RenderSettings& s) const;
