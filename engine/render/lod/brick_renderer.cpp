@@ -160,11 +160,7 @@ double windowed(const ChannelSettings& c, double v) {
 
 // The iso value windowed as plan_raycast gives it to the rays, and whether
 // windowed value x lies clearly below it (by far more than float rounding).
-double iso_windowed(const RenderSettings& s) {
-  const ChannelSettings ch = channel_settings(s, s.iso_channel);
-  const double v = std::clamp((s.iso_value - ch.window_lo) / (ch.window_hi - ch.window_lo), 0.0, 1.0);
-  return ch.gamma == 1.0 ? v : std::pow(v, ch.gamma);
-}
+double iso_windowed(const RenderSettings& s) { return windowed(channel_settings(s, s.iso_channel), s.iso_value); }
 bool clearly_below(double x, double iso_norm) { return x < iso_norm - 1e-4; }
 }  // namespace
 
@@ -259,10 +255,7 @@ bool CellOpacity::may_contribute(uint32_t channel, glm::vec2 texel_range) const 
   if (model_ == OpticalModel::kIsosurface) {
     // Only the iso channel's crossings end a ray; a cell it is clearly below holds none.
     if (!iso_skips_) return true;
-    if (channel != iso_channel_) return false;
-    const double x = ch.enabled ? (texel_range.y * ch.scale - ch.lo) / (ch.hi - ch.lo) : 0.0;
-    const double w = std::clamp(x, 0.0, 1.0);
-    return !clearly_below(ch.gamma == 1.0 ? w : std::pow(w, ch.gamma), iso_norm_);
+    return channel == iso_channel_ && !clearly_below(windowed(channel, texel_range.y), iso_norm_);
   }
   if (!ch.enabled) return false;
   // The lookup at u = x * 255 mixes entries floor(u) and floor(u) + 1 (the
@@ -1706,8 +1699,10 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
       split += facts.split;
       groups += facts.boxed_groups;
       ++st.bricks_walked;
-      minip.lowest_max = std::min(minip.lowest_max, facts.lowest_max);
-      for (uint32_t b = 0; b < kMinIpBins; ++b) minip.minima[b] += facts.minima[b];
+      if (s.model == OpticalModel::kMinIp) {
+        minip.lowest_max = std::min(minip.lowest_max, facts.lowest_max);
+        for (uint32_t b = 0; b < kMinIpBins; ++b) minip.minima[b] += facts.minima[b];
+      }
     }
     march_world[i] = {origin + local.lo * ds, origin + local.hi * ds};
   }
