@@ -373,6 +373,7 @@ float opaque_entries_upto(int c, int i) { return transfer_table[(VXR_TF_OPAQUE_R
 // rather than per ray and cell. Per model, with x0, x1 the windowed ends:
 //   mip: x1 (plus a margin): the cell is empty for a ray whose maximum is at least that;
 //   minip: x0 (minus a margin): empty for a ray whose minimum is at most that;
+//   average: 0 where every sample windows to 0 (average_cell_clear), else 1;
 //   others: how many table entries the lookup can reach have non-zero opacity (0: empty).
 // The range of walked cell `cell` (p.pass.y per axis) from the pool's cells
 // (p.pass.w per axis, as many or twice as many): the union of those it covers.
@@ -392,6 +393,17 @@ vec2 walk_cell_range(uint slot, int cell, int c) {
   return r;
 }
 
+// Average: whether every sample of a cell windows to 0 exactly, so adds
+// nothing to the sums (CellOpacity on the CPU: the same rule). A filter's
+// weights are non-negative: voxels at or below 0 (a stored maximum within
+// the padding of 0, shared/brick_params.h) filter to at most 0, which a
+// window starting at or above 0 clamps to 0; otherwise the maximum lies
+// clearly (1e-4 of the window) below the window's low end, far more than a
+// filter's rounding.
+bool average_cell_clear(vec2 range, vec4 w) {
+  return (range.y <= float(VXR_CELL_PAD_ABS) && w.x >= 0.0) || (range.y - w.x) * w.w < -1e-4;
+}
+
 float cell_key(uint slot, int cell, int c) {
   const uint m = VXR_SC_MODEL;
   const vec2 range = walk_cell_range(slot, cell, c);
@@ -402,6 +414,7 @@ float cell_key(uint slot, int cell, int c) {
   // outside it (0 or 1 exactly) it is exact.
   if (m == VXR_MODEL_MIP) return x1 + (VXR_SC_GAMMA && x1 > 0.0 ? 1e-5 : 0.0);
   if (m == VXR_MODEL_MINIP) return x0 - (VXR_SC_GAMMA && x0 < 1.0 ? 1e-5 : 0.0);
+  if (m == VXR_MODEL_AVERAGE) return average_cell_clear(range, P.window[c]) ? 0.0 : 1.0;
   // Every table entry the lookup can mix has zero opacity: a value at u = x * 255
   // mixes entries floor(u) and, with a non-zero weight, floor(u) + 1, so the
   // range's entries are floor(u0) .. ceil(u1) (x = 0 or 1 exactly, outside the
@@ -446,9 +459,9 @@ uint cell_count() { return p.pass.y * p.pass.y * p.pass.y; }
 uint cell_words() { return (cell_count() + 31u) / 32u; }
 
 // The VXR_BRICK_CLASSIFY pass, one brick per workgroup column. MIP / MinIP:
-// cell_key of 64 cells of the brick's slot, every enabled channel. E-A and
-// emission: 64 words of 32 cells each, a bit set where every enabled
-// channel's key says empty.
+// cell_key of 64 cells of the brick's slot, every enabled channel. E-A,
+// emission and average: 64 words of 32 cells each, a bit set where every
+// enabled channel's key says empty (iso: where its channel is below the value).
 void classify_cells() {
   const uint b = p.control.z + gl_WorkGroupID.x;
   const uint index = gl_WorkGroupID.y * 64u + gl_LocalInvocationIndex;
@@ -663,6 +676,15 @@ bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
   return t1 > t0;
 }
 
+// Average: the length of the brick's whole segment [t0, t1) counts, its
+// samples counted as the march below counts them, whether the walks skip
+// them, the tile's depths clip them (build_tile_lists keeps a tile's entry
+// for this) or the brick takes none (box_hi.w).
+void add_brick_length(inout VxrRay ray, BrickRecord br, vec3 dir, float t0, float t1, float offset) {
+  const float dt = P.march.x / length(dir * br.scale.xyz);
+  vxr_add_length(ray, ceil(t1 / dt - offset) - ceil(t0 / dt - offset), dt);
+}
+
 // Lens warp, one axis: warped pixel coordinate q (n rays, `edge` per outer
 // band at `step` pixels each) -> coordinate in the full image; xr/lens_warp.h.
 float unwarp(float q, float edge, float n, float stride) {
@@ -795,6 +817,7 @@ void main() {
         b = subgroupBroadcastFirst(entry.x);
         br = brick_record(b);
         hit = item_mode || segment(br, dir, t0, t1);
+        if (VXR_SC_MODEL == VXR_MODEL_AVERAGE && hit) add_brick_length(ray, br, dir, t0, t1, offset);
         if (hit && tile_lists) {
           // The view depths where this tile's rays can meet the brick's kept cells (build_tile_lists).
           t0 = max(t0, uintBitsToFloat(entry.y) * ray_len);
@@ -818,6 +841,8 @@ void main() {
         dt = P.march.x / length(dl);  // one local step, in t units
         i0 = ceil(t0 / dt - offset);
         n = int(ceil(t1 / dt - offset) - i0);
+        // Average: a brick with no kept cell (box_hi.w) only counts its length (add_brick_length).
+        if (VXR_SC_MODEL == VXR_MODEL_AVERAGE && br.box_hi.w != 0.0) n = 0;
         // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture),
         // unless no cell of its box is empty (box_lo.w): then a walk finds nothing.
         cells = VXR_SC_CELLS && p.pass.y != 0u && br.atlas.w >= 0.0 && br.box_lo.w == 0.0;

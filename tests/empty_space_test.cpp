@@ -11,10 +11,12 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <set>
 #include <tuple>
 
 #include "golden.h"
 #include "gpu_fixture.h"
+#include "render/camera.h"
 #include "render/lod/brick_renderer.h"
 #include "shared/brick_params.h"
 #include "volume/dense_chunk_source.h"
@@ -67,6 +69,12 @@ RenderSettings vessel_settings(OpticalModel model) {
   s.step_voxels = 0.5;
   s.density = 0.3;
   s.iso_value = 100;  // inside the vessels' walls
+  if (model == OpticalModel::kAverage) {
+    // A ray spends a few percent of its length in the vessels: a window and
+    // a table that show such averages.
+    s.channels[0].window_hi = 24;
+    s.channels[0].opacity_points = {{0.0, 0.0}, {0.05, 1.0}, {1.0, 1.0}};
+  }
   return s;
 }
 
@@ -460,7 +468,7 @@ TEST_CASE("empty-space cells: images with skipping on and off are bit-identical 
   BrickRenderer& r = *made;
   const Camera cam = orbit_camera(r.placement(), 30, 25, 1.25);
   const OpticalModel models[] = {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
-                                 OpticalModel::kMinIp, OpticalModel::kIsosurface};
+                                 OpticalModel::kMinIp, OpticalModel::kAverage, OpticalModel::kIsosurface};
   const BrickPassMode modes[] = {BrickPassMode::kMultipass, BrickPassMode::kTiled};
   for (OpticalModel model : models) {
     for (BrickPassMode mode : modes) {
@@ -507,7 +515,8 @@ TEST_CASE("empty-space cells: the cell walk keeps the image for rays along the a
                         {"along y", orbit_camera(r.placement(), 90, 0)},
                         {"eye inside", orbit_camera(r.placement(), 20, 10, 0.2)}};
   for (const View& v : views) {
-    for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kMip, OpticalModel::kIsosurface}) {
+    for (OpticalModel model : {OpticalModel::kEmissionAbsorption, OpticalModel::kMip, OpticalModel::kAverage,
+                               OpticalModel::kIsosurface}) {
       const std::string what = std::string(v.what) + " " + optical_model_name(model);
       INFO(what);
       const RenderSettings s = vessel_settings(model);
@@ -660,6 +669,69 @@ TEST_CASE("empty-space cells: isosurface frames skip what lies below the iso val
   CHECK(a.pixels == b.pixels);
   CHECK(on.samples == off.samples);
   CHECK(on.lod.skipped_empty == 0);
+}
+
+TEST_CASE("empty-space cells: average frames skip cells that window to 0 and still count every brick's length") {
+  // An average is the windowed values' sum over the length marched. A
+  // sample that windows to 0 adds nothing to the sum, and the rays count
+  // each brick's whole segment at its head (vxr_add_length), so the cells
+  // and bricks whose samples all window to 0 are walked past or only
+  // counted. Views from outside, along an axis, from inside, with an ROI
+  // and a cut, both pass modes, and a frame that mixes LOD levels (each
+  // level's bricks step in their own voxels).
+  test::GpuTestScope scope;
+  auto src = sparse_vessels(128);
+  auto made = small_pool_renderer(*src);
+  BrickRenderer& r = *made;
+  for (const ClipView& v : clip_views(r.placement())) {
+    for (BrickPassMode mode : {BrickPassMode::kTiled, BrickPassMode::kMultipass}) {
+      RenderSettings s = vessel_settings(OpticalModel::kAverage);
+      BrickFrameSettings f = v.frame();
+      f.mode = mode;
+      INFO(std::string(v.what) << (mode == BrickPassMode::kTiled ? " tiled" : " multipass"));
+      check_skipping_keeps_image(r, v.cam, s, f, 97, 97);
+    }
+  }
+  // The orbit view with the automatic LOD: near bricks at level 0, far ones at level 1.
+  const ClipView orbit = clip_views(r.placement())[0];
+  BrickFrameSettings mixed = orbit.frame();
+  mixed.lod.force_level = -1;
+  const VoxelSpaceRays rays = rays_in_voxel_space(orbit.cam, r.placement(), 97, 97);
+  LodQueries all;
+  all.visible = [](const ChunkKey&) { return true; };
+  all.resident = [](const ChunkKey&) { return true; };
+  std::set<uint32_t> levels;
+  for (const ChunkKey& k : traverse_lod(*src, {rays.eye, rays.forward, rays.right, rays.up, 97, 97}, mixed.lod, all).draw)
+    levels.insert(k.level);
+  CHECK(levels.size() > 1);
+  INFO("levels mixed");
+  check_skipping_keeps_image(r, orbit.cam, vessel_settings(OpticalModel::kAverage), mixed, 97, 97);
+
+  // The ball's corners are 0 exactly: skipped under a window from 0, kept
+  // under one from below 0 (0 then windows above 0), with the same image.
+  auto ball = DenseChunkSource::create({linear_ball()}, 16, 2);
+  REQUIRE(ball.is_ok());
+  auto ball_made = BrickRenderer::create(test::gpu_context(), **ball, {});
+  REQUIRE(ball_made.is_ok());
+  const Camera cam = orbit_camera((*ball_made)->placement(), 30, 25, 1.3);
+  for (double lo : {0.0, -10.0}) {
+    RenderSettings s;
+    s.model = OpticalModel::kAverage;
+    s.channels[0].window_lo = lo;
+    s.channels[0].window_hi = 255;
+    s.step_voxels = 0.5;
+    BrickFrameSettings f;
+    f.lod.force_level = 0;
+    BrickFrameStats on, off;
+    const ImageRgba8 a = converge(**ball_made, cam, s, f, 72, 72, &on);
+    f.lod.skip_empty = false;
+    const ImageRgba8 b = converge(**ball_made, cam, s, f, 72, 72, &off);
+    INFO("window from " << lo << ": samples " << on.samples << " vs " << off.samples << ", walked " << on.bricks_walked << " of " << on.lod.drawn);
+    CHECK(test::looks_non_blank(a));
+    CHECK(a.pixels == b.pixels);
+    if (lo == 0.0) CHECK(on.samples < off.samples);
+    else CHECK(on.samples == off.samples);
+  }
 }
 
 TEST_CASE("empty-space cells: one-channel MinIP walks its cells only where rays can skip them, with the same image") {
@@ -946,8 +1018,21 @@ TEST_CASE("empty-space cells: the CPU cell test keeps every cell that can reach 
   const CellOpacity minip(s, build_transfer_table(s), u8);
   CHECK_FALSE(minip.may_contribute(0, {texel(201), texel(255)}));
   CHECK(minip.may_contribute(0, {texel(200), texel(255)}));
+  // Average: a cell adds nothing only where every sample windows to 0 exactly:
+  // clearly below the window's low end, or nothing above 0 under a window from 0 up.
   s.model = OpticalModel::kAverage;
-  CHECK(CellOpacity(s, build_transfer_table(s), u8).may_contribute(0, {texel(201), texel(255)}));
+  const CellOpacity average(s, build_transfer_table(s), u8);
+  CHECK(average.may_contribute(0, {texel(201), texel(255)}));
+  CHECK_FALSE(average.may_contribute(0, {texel(0), texel(74)}));
+  CHECK(average.may_contribute(0, {texel(0), texel(75)}));  // at the low end: within a filter's rounding
+  CHECK(average.hash() != minip.hash());
+  s.channels[0].window_lo = 0;
+  CHECK_FALSE(CellOpacity(s, build_transfer_table(s), u8).may_contribute(0, {texel(0), texel(0)}));
+  CHECK(CellOpacity(s, build_transfer_table(s), u8).may_contribute(0, {texel(0), texel(1)}));
+  s.channels[0].window_lo = -10;  // 0 windows above 0
+  CHECK(CellOpacity(s, build_transfer_table(s), u8).may_contribute(0, {texel(0), texel(0)}));
+  s.channels[0].enabled = false;  // the rays see a channel not drawn as 0
+  CHECK_FALSE(CellOpacity(s, build_transfer_table(s), u8).may_contribute(0, {texel(0), texel(255)}));
 }
 
 TEST_CASE("bench probes: fetch-only and march-only frames take the shaded frame's samples, in both pass modes") {

@@ -18,6 +18,11 @@ using uvec4 = glm::uvec4;
 // stored range also bounds every sample up to VXR_CELL_BAND voxels outside
 // it, which absorbs rounding in the walk and in samples' positions.
 #define VXR_CELL_BAND (1.0 / 64.0)
+// The stored range is then widened by far more than a filter's rounding:
+// each end by VXR_CELL_PAD_REL of its size plus VXR_CELL_PAD_ABS, so a
+// stored maximum of at most VXR_CELL_PAD_ABS means no voxel above 0.
+#define VXR_CELL_PAD_REL 1e-5
+#define VXR_CELL_PAD_ABS 1e-7
 
 // The transfer buffer (bindings 1 and 12): rows of VXR_TF_SIZE RGBA32F
 // entries, three per channel c (VXR_MAX_CHANNELS channels):
@@ -86,7 +91,8 @@ struct BrickRecord {
   vec4 scale;   // xyz: local voxels per level-0 voxel along each axis (1 / downsample)
   vec4 box_lo;  // xyz: where marching starts being allowed (0, or the ROI), local voxels;
                 // w: 1 where every cell in the box is kept, so its rays march without a cell walk
-  vec4 box_hi;  // xyz: the brick's extent clipped to the volume and the ROI
+  vec4 box_hi;  // xyz: the brick's extent clipped to the volume and the ROI;
+                // w: 1 where no cell is kept: average rays add the segment's length, no sample
   vec4 atlas;   // xyz: atlas texel coordinate of the local origin; w: atlas slot (cell ranges), < 0: none
   vec4 plane;   // cut plane in local voxels: keep dot(xyz, p) + w >= 0; xyz = 0: none
 };

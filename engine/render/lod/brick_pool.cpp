@@ -175,7 +175,8 @@ void cell_ranges_as_float(const T* texels, uint32_t edge, const BrickCells& cell
     if (rl < l) l = (1.0f - ring_weight) * l + ring_weight * rl;
     if (rh > h) h = (1.0f - ring_weight) * h + ring_weight * rh;
     // Filtering mixes values with rounded weights: widen by far more than its rounding.
-    const float pad_lo = std::abs(l) * 1e-5f + 1e-7f, pad_hi = std::abs(h) * 1e-5f + 1e-7f;
+    constexpr float kRel = float(VXR_CELL_PAD_REL), kAbs = float(VXR_CELL_PAD_ABS);
+    const float pad_lo = std::abs(l) * kRel + kAbs, pad_hi = std::abs(h) * kRel + kAbs;
     out[i] = glm::vec2(l - pad_lo, h + pad_hi);
   }
 }

@@ -258,6 +258,17 @@ bool CellOpacity::may_contribute(uint32_t channel, glm::vec2 texel_range) const 
     return channel == iso_channel_ && !clearly_below(windowed(channel, texel_range.y), iso_norm_);
   }
   if (!ch.enabled) return false;
+  if (model_ == OpticalModel::kAverage) {
+    // Average sums windowed values: a cell adds nothing when each of its
+    // samples windows to 0 exactly (brick_raycast.comp average_cell_clear,
+    // the same rule in float). Filters weigh voxels by non-negative weights,
+    // so voxels at or below 0 (a stored maximum within the pool's padding
+    // of 0) filter to at most 0, which a window starting at or above 0
+    // clamps to 0; any other maximum must lie clearly below the window's
+    // low end, by far more than a filter's rounding.
+    const bool none_above_0 = texel_range.y <= float(VXR_CELL_PAD_ABS);
+    return !((none_above_0 && ch.lo >= 0.0) || (texel_range.y * ch.scale - ch.lo) / (ch.hi - ch.lo) < -1e-4);
+  }
   // The lookup at u = x * 255 mixes entries floor(u) and floor(u) + 1 (the
   // latter with weight 0 at an integer u). The shader's float u lies within
   // far less than kSlack of this one; a value clear of the window (by more
@@ -799,7 +810,8 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
     const bool any = glm::all(glm::lessThan(lo, hi));
     const uint32_t boxed = any ? (ghi.x - glo.x) * (ghi.y - glo.y) * (ghi.z - glo.z) : 0;
     const bool all_kept = any && kept_count == (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
-    oc.key = key, oc.settings = cells->hash(), oc.lo = lo, oc.hi = hi, oc.facts = {split, boxed, all_kept, minip.lowest_max, minip.minima};
+    oc.key = key, oc.settings = cells->hash(), oc.lo = lo, oc.hi = hi;
+    oc.facts = {split, boxed, all_kept, kept_count == count, kept_count == 0, minip.lowest_max, minip.minima};
     oc.blocks.clear();  // (keeps its capacity: settings changes recompute every drawn brick)
     // Blocks of kBlockCells^3 cells: the tight box of each one's kept cells, grown as the march box.
     const uint32_t bc = kBlockCells, nb = (n + bc - 1) / bc;
@@ -820,13 +832,17 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
   }
   if (facts) *facts = oc.facts;
   if (blocks) *blocks = &oc.blocks;
+  // Average counts the length of the segment of a brick's whole box
+  // (brick_raycast.comp add_brick_length): it walks past its empty cells,
+  // and its tile entries clip to the blocks' depths.
+  if (cells->model() == OpticalModel::kAverage) return m;
   m.lo = glm::max(m.lo, glm::dvec3(oc.lo) * s - 0.5 - grow);
   m.hi = glm::min(m.hi, glm::dvec3(oc.hi) * s - 0.5 + grow);
   return m;
 }
 
 void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
-                                const LodSettings& clip, const BrickBox& local, bool walk) const {
+                                const LodSettings& clip, const BrickBox& local, bool walk, bool length_only) const {
   // Everything in double, then local (small) numbers to float.
   const BrickBox box = chunk_box(src_, key);
   const auto& ds_u = src_.levels()[key.level].downsample;
@@ -838,6 +854,7 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
   r.box_lo = v4(local.lo);
   r.box_hi = v4(glm::max(local.lo, local.hi));
   r.box_lo.w = walk ? 0.0f : 1.0f;
+  r.box_hi.w = length_only ? 1.0f : 0.0f;
   r.atlas = glm::vec4(atlas_origin, float(pool_->slot_of(key)));  // w: the slot, for its cell ranges
   if (clip.cut.enabled) {
     // dot(n, lo0 + ds * p) + d  ->  dot(n * ds, p) + dot(n, lo0) + d, normalised.
@@ -909,8 +926,8 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                              (direct ? 0u : VXR_BRICK_FINAL_FLOAT);
   shader::BrickCastParams p{};
   // Empty-space cells: for the models whose empty samples change nothing
-  // (average counts every length; iso where its crossings read their sample
-  // back again, iso_skips).
+  // (average: its length counted per brick; iso where its crossings read
+  // their sample back again, iso_skips).
   // MIP / MinIP test a cell against the ray's running value, so each cell
   // costs a walk; they pay from 8 samples a cell (4-voxel cells: step 0.5).
   // MRI MIP (`vxr render assets/mri-stack/volume.json --model mip --window
@@ -921,7 +938,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
   const bool reduce = model == VXR_MODEL_MIP || model == VXR_MODEL_MINIP;
   const BrickCells walk = walk_cells(pool_->cells(), reduce || cell_walk == CellWalk::kGroups);
   const bool cells = cell_walk != CellWalk::kOff &&
-                     (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION ||
+                     (model == VXR_MODEL_EMISSION_ABSORPTION || model == VXR_MODEL_EMISSION || model == VXR_MODEL_AVERAGE ||
                       (model == VXR_MODEL_ISOSURFACE && iso_skips(s)) || (reduce && walk.cell_size >= 8.0 * s.step_voxels));
   const uint32_t cells_per_axis = cells ? walk.cells_per_axis : 0u;
   if (!cells && stats) stats->bricks_walked = 0;  // record_view counted the bricks that would walk
@@ -1373,7 +1390,8 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Bri
 Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                                        const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
                                        const LodView& view, const WarpAxis& ax, const WarpAxis& ay, bool by_groups,
-                                       glm::uvec4* dst, size_t capacity, size_t* used, WorkSpans* spans) {
+                                       bool length_counts, glm::uvec4* dst, size_t capacity, size_t* used,
+                                       WorkSpans* spans) {
   const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
   spans->blocks = 0;
   spans->by_groups = by_groups;
@@ -1439,7 +1457,11 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
     for (uint32_t y = t0.y; y <= t1.y; ++y)
       for (uint32_t x = t0.x; x <= t1.x; ++x) {
         const glm::dvec2 e = depths[size_t(y - t0.y) * rw + (x - t0.x)];
-        if (!(e.x <= e.y)) continue;  // no block here: its rays would find every cell empty
+        if (!(e.x <= e.y)) {  // no block here: its rays would find every cell empty
+          // Average rays still count the brick's length: an entry whose depths clip every sample.
+          if (length_counts) lists[size_t(y) * tw + x].push_back({b, glm::vec2(0.0f, 0.0f)});
+          continue;
+        }
         // Widened well past float rounding of the rays' depths.
         const double margin = 1e-4 * e.y + 1e-3;
         lists[size_t(y) * tw + x].push_back({b, glm::vec2(float(std::max(0.0, e.x - margin)), float(e.y + margin))});
@@ -1645,13 +1667,14 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
                                                                sizeof(shader::BrickRecord)) +
                         " (of " + std::to_string(opt_.max_bricks) + "); raise the LOD bias or max_bricks");
   // Where skipping jumps empty cells, rays march only the box of a brick's
-  // kept cells (every model but average, and iso where iso_skips), and the
-  // work lists cover only its screen rectangle: the same image, without the
-  // empty margin.
+  // kept cells (every model but average, which marches whole bricks, and
+  // iso only where iso_skips), and the work lists cover only its screen
+  // rectangle: the same image, without the empty margin.
   const bool skip_cells = frame.lod.skip_empty && frame.skip_cells;
-  const bool boxes = s.model != OpticalModel::kAverage && (s.model != OpticalModel::kIsosurface || iso_skips(s));
+  const bool whole_bricks = s.model == OpticalModel::kAverage;
+  const bool classified = s.model != OpticalModel::kIsosurface || iso_skips(s);
   std::optional<CellOpacity> cell_opacity;
-  if (skip_cells && boxes) cell_opacity.emplace(s, tf, value_scales_);
+  if (skip_cells && classified) cell_opacity.emplace(s, tf, value_scales_);
   std::vector<BrickBox>& march_world = march_world_;  // reused: no allocation per view once sizes settle
   std::vector<uint8_t>& walks = walks_;
   march_world.resize(lod.draw.size());
@@ -1683,7 +1706,9 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     const std::vector<BrickBox>* kept_blocks = nullptr;  // march_box's cache: valid until its next call
     const BrickBox local = march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts,
                                      opt_.tile_depths ? &kept_blocks : nullptr);
-    const bool walk = near && (reduce || !facts.all_kept);
+    // Average: a brick with no kept cell adds only its segment's length, no sample.
+    const bool length_only = whole_bricks && cell_opacity && near && facts.none_kept;
+    const bool walk = near && !length_only && (reduce || !(whole_bricks ? facts.every_kept : facts.all_kept));
     if (kept_blocks && walk) {
       blocks_[i].x = static_cast<uint32_t>(block_world_.size());
       for (const BrickBox& b : *kept_blocks) {
@@ -1694,7 +1719,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     }
     walks[i] = walk;
     fill_record(static_cast<uint8_t*>(table_.mapped) + table_base + i * sizeof(shader::BrickRecord), key,
-                glm::vec3(o), view, frame.lod, local, walk);
+                glm::vec3(o), view, frame.lod, local, walk, length_only);
     if (cell_opacity && walk) {  // only walked bricks weigh in the choice of cells or groups below
       split += facts.split;
       groups += facts.boxed_groups;
@@ -1728,8 +1753,8 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     if (mode == BrickPassMode::kMultipass) {
       VXR_ASSIGN_OR_RETURN(spans.waves, build_waves(march_world, view, ax, ay, dst, items_capacity, &items_n));
     } else if (mode == BrickPassMode::kTiled) {
-      VXR_RETURN_IF_ERROR(build_tile_lists(march_world, walks, blocks_, block_world_, view, ax, ay, by_groups, dst,
-                                           items_capacity, &items_n, &spans));
+      VXR_RETURN_IF_ERROR(build_tile_lists(march_world, walks, blocks_, block_world_, view, ax, ay, by_groups,
+                                           whole_bricks, dst, items_capacity, &items_n, &spans));
     }
     return Status::ok();
   };

@@ -27,8 +27,9 @@
 // Empty space is skipped three ways, with identical images: the traversal
 // drops bricks whose min/max maps to zero opacity (brick_may_contribute);
 // rays march only the box of a brick's cells that may change a ray
-// (CellOpacity, march_box; every model but average and iso), and the work
-// lists cover only that box's screen rectangle; rays jump the empty cells (~4^3 voxels,
+// (CellOpacity, march_box; average marches whole bricks, whose length it
+// counts, and iso needs iso_back_sample), and the work lists cover only
+// that box's screen rectangle; rays jump the empty cells (~4^3 voxels,
 // BrickCells) inside it, on the same sample grid. LodSettings::skip_empty
 // turns all off, BrickFrameSettings::skip_cells the boxes and cells (`vxr
 // bench peer` measures).
@@ -171,7 +172,8 @@ Status check_brick_settings(const RenderSettings& s, uint32_t channels = 1);
 //    one that took samples shows the table at its maximum).
 //  - minip: the mirror image: every range at or above the window's high end
 //    (windowed 1 never lowers the running minimum) and entry 255 transparent.
-//  - average: never (a skipped brick would shorten the length averaged over).
+//  - average: never (the length averaged over is counted per brick marched;
+//    its empty cells are skipped inside the brick: CellOpacity).
 //  - iso: the iso channel's range reaches the iso value (below it no sample
 //    can cross), where iso_back_sample holds; otherwise never (a crossing is
 //    then refined against the sample the ray carried, which a skip would lose).
@@ -196,8 +198,11 @@ bool iso_back_sample(const RenderSettings& s);
 // float test calls empty too; for MIP / MinIP brick_may_contribute's rule per
 // cell (clearly below / above the window, entry 0 / 255 transparent); for iso
 // (where iso_back_sample holds) the iso channel clearly below the iso value;
-// other models keep every cell. Marching only the box of the cells it keeps
-// (BrickRenderer::march_box) then gives the image of marching them all.
+// for average every sample windowing to 0 exactly (it adds nothing; the
+// rays count the length of each brick's whole segment). Marching only the
+// box of the cells it keeps (BrickRenderer::march_box; average marches its
+// whole bricks and walks past the empty cells) then gives the image of
+// marching them all.
 class CellOpacity {
  public:
   // `value_scales`: per drawn channel, data units per texel unit.
@@ -407,21 +412,26 @@ class BrickRenderer final : public VolumeRenderer {
     uint32_t split = 0;
     uint32_t boxed_groups = 0;  // groups meeting the box of kept cells (what a walk may cross)
     bool all_kept = false;      // every cell in the box is kept: a walk would find no empty cell
+    bool every_kept = false;    // every cell of the brick is kept (average marches the whole brick)
+    bool none_kept = false;     // no cell is kept (average: the brick adds only its length)
     // One-channel MinIP (see record_view): the lowest windowed maximum of
     // any cell, and the cells by windowed minimum in kMinIpBins bins over 0..1.
     float lowest_max = 1.0f;
     std::array<uint32_t, kMinIpBins> minima{};
   };
-  // `blocks` (with `cells`; else null): the kept cells' boxes in blocks of
+  // The brick's box in its local voxels, clipped to the ROI and, with
+  // `cells`, to the box of its kept cells (not for average: see the body).
+  // `blocks` (with `cells`; else null; never for average): the kept cells' boxes in blocks of
   // kBlockCells^3 cells, each the tight box of the block's kept cells
   // grown like the march box (local voxels, not clipped to the ROI), cached
   // per slot and valid until the next call.
   BrickBox march_box(const ChunkKey& key, const LodSettings& clip, const CellOpacity* cells,
                      CellFacts* facts = nullptr, const std::vector<BrickBox>** blocks = nullptr);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in
-  // texels; `box`: march_box, local voxels; `walk`: its rays walk cells).
+  // texels; `box`: march_box, local voxels; `walk`: its rays walk cells;
+  // `length_only`: average rays add its segment's length and take no sample).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
-                   const LodSettings& clip, const BrickBox& box, bool walk) const;
+                   const LodSettings& clip, const BrickBox& box, bool walk, bool length_only = false) const;
   // Records one view's dispatches with `set` and writes the result into `target`.
   // Which empty-space cells the rays walk: none, the pool's (BrickCells), or
   // groups of 2x2x2 of them where the pool's are smaller than 4 voxels
@@ -502,10 +512,13 @@ class BrickRenderer final : public VolumeRenderer {
   // `by_groups`: the tiles with a brick that walks also as the 4x2 blocks
   // (spans->marched_groups) whose rays can meet a brick's screen rectangle
   // or, where it has them, one of its blocks (TileFrusta::group_meets).
+  // `length_counts` (average): a tile whose rays meet none of a brick's
+  // blocks keeps it, with depths that clip every sample: its rays count the
+  // brick's length (brick_raycast.comp add_brick_length).
   Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                           const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
                           const LodView& view, const WarpAxis& ax, const WarpAxis& ay, bool by_groups,
-                          glm::uvec4* dst, size_t capacity, size_t* used, WorkSpans* spans);
+                          bool length_counts, glm::uvec4* dst, size_t capacity, size_t* used, WorkSpans* spans);
   // A work list of at least `entries` (twice the old at least), the old one
   // kept until the next begin_frame: the frame's earlier views still read it.
   Status grow_work_list(size_t entries);
