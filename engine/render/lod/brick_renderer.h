@@ -421,7 +421,7 @@ class BrickRenderer final : public VolumeRenderer {
   };
   // The brick's box in its local voxels, clipped to the ROI and, with
   // `cells`, to the box of its kept cells (not for average: see the body).
-  // `blocks` (with `cells`; else null; never for average): the kept cells' boxes in blocks of
+  // `blocks` (with `cells`; else null): the kept cells' boxes in blocks of
   // kBlockCells^3 cells, each the tight box of the block's kept cells
   // grown like the march box (local voxels, not clipped to the ROI), cached
   // per slot and valid until the next call.
