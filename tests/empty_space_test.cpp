@@ -132,6 +132,18 @@ void check_skipping_keeps_image(BrickRenderer& r, const Camera& cam, const Rende
   CHECK(on.samples < off.samples);
 }
 
+// check_skipping_keeps_image from each of the clip views, tiled and multipass.
+void check_clip_views_keep_image(BrickRenderer& r, const RenderSettings& s) {
+  for (const ClipView& v : clip_views(r.placement())) {
+    for (BrickPassMode mode : {BrickPassMode::kTiled, BrickPassMode::kMultipass}) {
+      BrickFrameSettings f = v.frame();
+      f.mode = mode;
+      INFO(std::string(v.what) << (mode == BrickPassMode::kTiled ? " tiled" : " multipass"));
+      check_skipping_keeps_image(r, v.cam, s, f, 97, 97);
+    }
+  }
+}
+
 // The direct definition: every texel a sample inside the cell filters (its
 // core) and one voxel further (its ring), as floats, std::min/max from +-inf;
 // the core's ends moved towards the ring's by the band's weight.
@@ -644,17 +656,11 @@ TEST_CASE("empty-space cells: isosurface frames skip what lies below the iso val
   auto src = sparse_vessels(128);
   auto made = small_pool_renderer(*src);
   BrickRenderer& r = *made;
-  for (const ClipView& v : clip_views(r.placement())) {
-    for (double step : {0.5, kIsoBackStep}) {
-      for (BrickPassMode mode : {BrickPassMode::kTiled, BrickPassMode::kMultipass}) {
-        RenderSettings s = vessel_settings(OpticalModel::kIsosurface);
-        s.step_voxels = step;
-        BrickFrameSettings f = v.frame();
-        f.mode = mode;
-        INFO(v.what << " step " << step << (mode == BrickPassMode::kTiled ? " tiled" : " multipass"));
-        check_skipping_keeps_image(r, v.cam, s, f, 97, 97);
-      }
-    }
+  for (double step : {0.5, kIsoBackStep}) {
+    RenderSettings s = vessel_settings(OpticalModel::kIsosurface);
+    s.step_voxels = step;
+    INFO("step " << step);
+    check_clip_views_keep_image(r, s);
   }
   // Past the step the apron holds: the same image and every sample taken.
   RenderSettings s = vessel_settings(OpticalModel::kIsosurface);
@@ -674,7 +680,7 @@ TEST_CASE("empty-space cells: isosurface frames skip what lies below the iso val
 TEST_CASE("empty-space cells: average frames skip cells that window to 0 and still count every brick's length") {
   // An average is the windowed values' sum over the length marched. A
   // sample that windows to 0 adds nothing to the sum, and the rays count
-  // each brick's whole segment at its head (vxr_add_length), so the cells
+  // each brick's whole segment at its head (add_brick_length), so the cells
   // and bricks whose samples all window to 0 are walked past or only
   // counted. Views from outside, along an axis, from inside, with an ROI
   // and a cut, both pass modes, and a frame that mixes LOD levels (each
@@ -683,15 +689,7 @@ TEST_CASE("empty-space cells: average frames skip cells that window to 0 and sti
   auto src = sparse_vessels(128);
   auto made = small_pool_renderer(*src);
   BrickRenderer& r = *made;
-  for (const ClipView& v : clip_views(r.placement())) {
-    for (BrickPassMode mode : {BrickPassMode::kTiled, BrickPassMode::kMultipass}) {
-      RenderSettings s = vessel_settings(OpticalModel::kAverage);
-      BrickFrameSettings f = v.frame();
-      f.mode = mode;
-      INFO(std::string(v.what) << (mode == BrickPassMode::kTiled ? " tiled" : " multipass"));
-      check_skipping_keeps_image(r, v.cam, s, f, 97, 97);
-    }
-  }
+  check_clip_views_keep_image(r, vessel_settings(OpticalModel::kAverage));
   // The orbit view with the automatic LOD: near bricks at level 0, far ones at level 1.
   const ClipView orbit = clip_views(r.placement())[0];
   BrickFrameSettings mixed = orbit.frame();
