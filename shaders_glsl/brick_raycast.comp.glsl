@@ -676,13 +676,34 @@ bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
   return t1 > t0;
 }
 
-// Average: the length of the brick's whole segment [t0, t1) counts, its
-// samples counted as the march below counts them, whether the walks skip
-// them, the tile's depths clip them (build_tile_lists keeps a tile's entry
-// for this) or the brick takes none (box_hi.w).
-void add_brick_length(inout VxrRay ray, BrickRecord br, vec3 dir, float t0, float t1, float offset) {
-  const float dt = P.march.x / length(dir * br.scale.xyz);
-  vxr_add_length(ray, ceil(t1 / dt - offset) - ceil(t0 / dt - offset), dt);
+// Average: the length it averages over, from the ray's chord through the
+// region (the volume within the ROI, in front of the cut, short of the
+// underlay's depth): the samples of the ray's level-0 grid there times the
+// step, as the CPU reference counts them. It does not depend on which
+// bricks or cells are marched or skipped, so samples that window to 0 can
+// be skipped without changing a bit. (The slab test is segment's, on the
+// region in voxel coordinates.)
+float region_length(vec3 dir, float offset) {
+  const vec3 e = P.eye.xyz, lo = P.region_lo.xyz, hi = P.region_hi.xyz;
+  const bvec3 parallel = equal(dir, vec3(0.0));
+  const uvec3 outside = uvec3(lessThan(e, lo)) | uvec3(greaterThanEqual(e, hi));
+  if (any(bvec3(uvec3(parallel) & outside))) return 0.0;
+  const vec3 inv = 1.0 / dir;
+  const vec3 ta = (lo - e) * inv, tb = (hi - e) * inv;
+  const vec3 tmin = mix(min(ta, tb), vec3(-1.0 / 0.0), parallel);
+  const vec3 tmax = mix(max(ta, tb), vec3(1.0 / 0.0), parallel);
+  float t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
+  float t1 = min(min(min(tmax.x, tmax.y), tmax.z), g_t_limit);
+  const vec4 pl = P.cut;
+  if (pl.xyz != vec3(0.0)) {
+    const float num = dot(pl.xyz, e) + pl.w, den = dot(pl.xyz, dir);
+    if (den > 0.0) t0 = max(t0, -num / den);
+    else if (den < 0.0) t1 = min(t1, -num / den);
+    else if (num < 0.0) return 0.0;
+  }
+  if (!(t1 > t0)) return 0.0;
+  const float dt = P.march.x / length(dir);  // a level-0 brick's step (scale 1)
+  return max(ceil(t1 / dt - offset) - ceil(t0 / dt - offset), 0.0) * dt;
 }
 
 // Lens warp, one axis: warped pixel coordinate q (n rays, `edge` per outer
@@ -766,6 +787,8 @@ void main() {
     else g_probe = state.x;
   }
   if (item_mode && ray.done) return;  // terminated earlier: nothing to add
+  // Average: the length once per ray, where it starts or first loads its state (region_length).
+  if (VXR_SC_MODEL == VXR_MODEL_AVERAGE && ray.count == 0.0) ray.count = region_length(dir, offset);
   uint taken = 0u;
 
   const bool tile_lists = (flags & VXR_BRICK_TILE_LISTS) != 0u;
@@ -817,7 +840,6 @@ void main() {
         b = subgroupBroadcastFirst(entry.x);
         br = brick_record(b);
         hit = item_mode || segment(br, dir, t0, t1);
-        if (VXR_SC_MODEL == VXR_MODEL_AVERAGE && hit) add_brick_length(ray, br, dir, t0, t1, offset);
         if (hit && tile_lists) {
           // The view depths where this tile's rays can meet the brick's kept cells (build_tile_lists).
           t0 = max(t0, uintBitsToFloat(entry.y) * ray_len);
@@ -841,7 +863,7 @@ void main() {
         dt = P.march.x / length(dl);  // one local step, in t units
         i0 = ceil(t0 / dt - offset);
         n = int(ceil(t1 / dt - offset) - i0);
-        // Average: a brick with no kept cell (box_hi.w) only counts its length (add_brick_length).
+        // Average: a brick with no kept cell (box_hi.w) is listed only so its rays are cast.
         if (VXR_SC_MODEL == VXR_MODEL_AVERAGE && br.box_hi.w != 0.0) n = 0;
         // Cells: this brick's slot (atlas.w, < 0: none, the monolithic texture),
         // unless no cell of its box is empty (box_lo.w): then a walk finds nothing.

@@ -300,7 +300,10 @@ TEST_CASE("brick features: empty-space skip rule per model (CPU)") {
   CHECK_FALSE(may(OpticalModel::kMip, 0, 6));   // never raises the maximum
   CHECK(may(OpticalModel::kMip, 0, 9));
   CHECK(may(OpticalModel::kMinIp, 0, 6));       // a zero lowers the minimum: never skip it
-  CHECK(may(OpticalModel::kAverage, 0, 0));      // would shorten the averaged length
+  // Average (its length comes from the ray's chord): clearly below the window, skipped;
+  // reaching its low end, kept.
+  CHECK_FALSE(may(OpticalModel::kAverage, 0, 6));
+  CHECK(may(OpticalModel::kAverage, 0, 8));
   // Iso (default iso value 128, step 0.5): below the iso value no sample crosses.
   CHECK_FALSE(may(OpticalModel::kIsosurface, 0, 100));
   CHECK(may(OpticalModel::kIsosurface, 0, 130));
@@ -312,9 +315,16 @@ TEST_CASE("brick features: empty-space skip rule per model (CPU)") {
   s.channels[0].opacity_points = {{0.0, 1.0}, {0.99, 1.0}, {1.0, 0.0}};
   CHECK_FALSE(may(OpticalModel::kMinIp, 200, 250));
   CHECK(may(OpticalModel::kMinIp, 199, 250));
-  // MIP: entry 0 opaque -> no skipping (the ray's colour at value 0 is visible).
+  // MIP: entry 0 opaque -> no skipping (the ray's colour at value 0 is visible); nor for average.
   s.channels[0].opacity_points = {{0.0, 0.5}, {1.0, 1.0}};
   CHECK(may(OpticalModel::kMip, 0, 6));
+  CHECK(may(OpticalModel::kAverage, 0, 6));
+  // Average under a window from 0: a brick of zeros is skipped, one reaching above 0 kept.
+  s.channels[0].opacity_points = {{0.0, 0.0}, {1.0, 1.0}};
+  s.channels[0].window_lo = 0;
+  CHECK_FALSE(may(OpticalModel::kAverage, 0, 0));
+  CHECK(may(OpticalModel::kAverage, 0, 1));
+  s.channels[0].window_lo = 8;
   // Default ramp: entry 255 is opaque -> MinIP never skips.
   s.channels[0].opacity_points.clear();
   CHECK(may(OpticalModel::kMinIp, 200, 250));
@@ -512,7 +522,7 @@ TEST_CASE("brick features: a sample offset and per-pixel jitter hold across bric
   }
 }
 
-TEST_CASE("brick features: multi-channel states that fit a texel give the same image multipass and tiled") {
+TEST_CASE("brick features: multi-channel states that fit a texel give the same image multipass, tiled and with skipping off") {
   test::GpuTestScope scope;
   auto src = balls(false);
   const Camera cam = orbit_camera({{48, 48, 48}, {1, 1, 1}}, 20.0, 30.0, 1.1);
@@ -551,7 +561,16 @@ TEST_CASE("brick features: multi-channel states that fit a texel give the same i
     CHECK(test::looks_non_blank(multi));
     CHECK(ms.dispatches > 2);
     f.mode = BrickPassMode::kTiled;
-    CHECK(converge(*r, cam, s, f, 64, 64).pixels == multi.pixels);
+    BrickFrameStats ts;
+    CHECK(converge(*r, cam, s, f, 64, 64, &ts).pixels == multi.pixels);
+    // Skipping keeps the image: a cell is clear only where every drawn channel is.
+    f.lod.skip_empty = false;
+    BrickFrameStats off;
+    CHECK(converge(*r, cam, s, f, 64, 64, &off).pixels == multi.pixels);
+    INFO("samples with skipping " << ts.samples << ", without " << off.samples);
+    CHECK(ts.samples <= off.samples);
+    // The balls' background is 0: average (entry 0 opaque, so over whole bricks) walks past it.
+    if (v.model == OpticalModel::kAverage) CHECK(ts.samples < off.samples);
   }
 }
 

@@ -677,19 +677,35 @@ TEST_CASE("empty-space cells: isosurface frames skip what lies below the iso val
   CHECK(on.lod.skipped_empty == 0);
 }
 
-TEST_CASE("empty-space cells: average frames skip cells that window to 0 and still count every brick's length") {
+TEST_CASE("empty-space cells: average frames skip what windows to 0, their length taken from the ray's chord") {
   // An average is the windowed values' sum over the length marched. A
-  // sample that windows to 0 adds nothing to the sum, and the rays count
-  // each brick's whole segment at its head (add_brick_length), so the cells
-  // and bricks whose samples all window to 0 are walked past or only
-  // counted. Views from outside, along an axis, from inside, with an ROI
-  // and a cut, both pass modes, and a frame that mixes LOD levels (each
-  // level's bricks step in their own voxels).
+  // sample that windows to 0 adds nothing to the sum, and the rays take the
+  // length from their chord through the volume (region_length), not from
+  // what they march, so cells and bricks whose samples all window to 0 are
+  // skipped. Where the table's entry 0 is transparent, like any model's;
+  // where it is opaque, a ray that takes nothing still shows it, so the
+  // bricks stay listed whole and only their cells are skipped. Views from
+  // outside, along an axis, from inside, with an ROI and a cut, both pass
+  // modes, and a frame that mixes LOD levels.
   test::GpuTestScope scope;
   auto src = sparse_vessels(128);
   auto made = small_pool_renderer(*src);
   BrickRenderer& r = *made;
   check_clip_views_keep_image(r, vessel_settings(OpticalModel::kAverage));
+  RenderSettings zero_shows = vessel_settings(OpticalModel::kAverage);
+  zero_shows.channels[0].opacity_points = {{0.0, 1.0}, {1.0, 1.0}};
+  {
+    INFO("entry 0 opaque");
+    check_clip_views_keep_image(r, zero_shows);
+  }
+  // Which bricks each kind skips.
+  const ClipView front = clip_views(r.placement())[0];
+  BrickFrameStats transparent_zero, opaque_zero;
+  converge(r, front.cam, vessel_settings(OpticalModel::kAverage), front.frame(), 97, 97, &transparent_zero);
+  converge(r, front.cam, zero_shows, front.frame(), 97, 97, &opaque_zero);
+  CHECK(transparent_zero.lod.skipped_empty > 0);
+  CHECK(opaque_zero.lod.skipped_empty == 0);
+  CHECK(transparent_zero.samples < opaque_zero.samples);
   // The orbit view with the automatic LOD: near bricks at level 0, far ones at level 1.
   const ClipView orbit = clip_views(r.placement())[0];
   BrickFrameSettings mixed = orbit.frame();

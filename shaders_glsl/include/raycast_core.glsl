@@ -181,9 +181,9 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
     return;
   }
   if (model == VXR_MODEL_AVERAGE) {
-    // The length averaged over is the marcher's to count (vxr_add_length),
-    // for all of a segment's samples at once: samples it skips, whose
-    // windowed values are 0 exactly, then add nothing and still count.
+    // The length averaged over (count) is the marcher's: the ray's chord,
+    // so samples it skips, whose windowed values are 0 exactly, change
+    // nothing (brick_raycast.comp region_length).
     r.reduce += x * seg;
     return;
   }
@@ -261,11 +261,6 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
     }
     r.done = r.trans <= P.march.z;  // every channel is (nearly) opaque
   }
-}
-
-// Average: `samples` samples of length seg each, taken or skipped.
-void vxr_add_length(inout VxrRay r, float samples, float seg) {
-  if (VXR_SC_MODEL == VXR_MODEL_AVERAGE) r.count += samples * seg;
 }
 
 // The isosurface's colour at the crossing `pos` (ray parameter t): headlight

@@ -92,7 +92,7 @@ struct BrickRecord {
   vec4 box_lo;  // xyz: where marching starts being allowed (0, or the ROI), local voxels;
                 // w: 1 where every cell in the box is kept, so its rays march without a cell walk
   vec4 box_hi;  // xyz: the brick's extent clipped to the volume and the ROI;
-                // w: 1 where no cell is kept: average rays add the segment's length, no sample
+                // w: 1 where no cell is kept: an average over whole bricks casts its rays, no sample
   vec4 atlas;   // xyz: atlas texel coordinate of the local origin; w: atlas slot (cell ranges), < 0: none
   vec4 plane;   // cut plane in local voxels: keep dot(xyz, p) + w >= 0; xyz = 0: none
 };

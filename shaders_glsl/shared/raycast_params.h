@@ -55,10 +55,11 @@ struct RaycastParams {
   vec4 world_opacity;  // xyz: voxel size / opacity unit distance (world-unit opacity), all 0: per voxel; w: unused
   vec4 region_lo;      // xyz: the volume's box within the ROI, voxel coordinates (as eye); w: unused
   vec4 region_hi;
+  vec4 cut;            // the cut plane in voxel coordinates: keep dot(xyz, p) + w >= 0; xyz = 0: none
 };
 
 #ifdef __cplusplus
-static_assert(sizeof(RaycastParams) == 304, "std140 layout of RaycastParams changed: update both languages");
+static_assert(sizeof(RaycastParams) == 320, "std140 layout of RaycastParams changed: update both languages");
 }  // namespace vxr::shader
 #endif
 

@@ -162,15 +162,38 @@ double windowed(const ChannelSettings& c, double v) {
 // windowed value x lies clearly below it (by far more than float rounding).
 double iso_windowed(const RenderSettings& s) { return windowed(channel_settings(s, s.iso_channel), s.iso_value); }
 bool clearly_below(double x, double iso_norm) { return x < iso_norm - 1e-4; }
+
+// Average: whether every value up to `max` (data units) windows to 0
+// exactly (brick_raycast.comp average_cell_clear: the same rule). Filters
+// weigh voxels by non-negative weights, so voxels at or below 0 filter to
+// at most 0, which a window starting at or above 0 clamps to 0; any other
+// maximum must lie clearly below the window's low end, by far more than a
+// filter's rounding.
+bool average_clear(bool none_above_0, double max, double lo, double hi) {
+  return (none_above_0 && lo >= 0.0) || (max - lo) / (hi - lo) < -1e-4;
+}
 }  // namespace
 
 bool iso_back_sample(const RenderSettings& s) {
   return s.model == OpticalModel::kIsosurface && s.step_voxels <= kIsoBackStep;
 }
 
+bool average_shows_zero(const RenderSettings& s, const TransferTable& table) {
+  for (size_t c = 0; c < s.channels.size() && c < VXR_MAX_CHANNELS; ++c)
+    if (s.channels[c].enabled && table.at(int(c), 0).a > 0.0) return true;
+  return false;
+}
+
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, std::span<const ChunkStats> ranges) {
-  // Average never skips (see the header); iso tests its channel; the others each enabled channel.
-  if (s.model == OpticalModel::kAverage) return true;
+  // Iso tests its channel; the others each enabled channel.
+  if (s.model == OpticalModel::kAverage) {
+    if (average_shows_zero(s, table)) return true;
+    for (size_t c = 0; c < ranges.size() && c < s.channels.size(); ++c) {
+      const ChannelSettings& ch = s.channels[c];
+      if (ch.enabled && !average_clear(ranges[c].max <= 0.0, ranges[c].max, ch.window_lo, ch.window_hi)) return true;
+    }
+    return false;
+  }
   if (s.model == OpticalModel::kIsosurface) {
     if (!iso_back_sample(s) || s.iso_channel >= ranges.size() || s.iso_channel >= s.channels.size()) return true;
     const ChannelSettings& ch = s.channels[s.iso_channel];
@@ -219,6 +242,8 @@ CellOpacity::CellOpacity(const RenderSettings& s, const TransferTable& table, co
   };
   model_ = s.model;
   mix(&model_, sizeof(model_));
+  whole_bricks_ = s.model == OpticalModel::kAverage && average_shows_zero(s, table);
+  mix(&whole_bricks_, sizeof(whole_bricks_));
   if (iso_back_sample(s)) {
     iso_skips_ = true;
     iso_channel_ = s.iso_channel;
@@ -258,17 +283,11 @@ bool CellOpacity::may_contribute(uint32_t channel, glm::vec2 texel_range) const 
     return channel == iso_channel_ && !clearly_below(windowed(channel, texel_range.y), iso_norm_);
   }
   if (!ch.enabled) return false;
-  if (model_ == OpticalModel::kAverage) {
-    // Average sums windowed values: a cell adds nothing when each of its
-    // samples windows to 0 exactly (brick_raycast.comp average_cell_clear,
-    // the same rule in float). Filters weigh voxels by non-negative weights,
-    // so voxels at or below 0 (a stored maximum within the pool's padding
-    // of 0) filter to at most 0, which a window starting at or above 0
-    // clamps to 0; any other maximum must lie clearly below the window's
-    // low end, by far more than a filter's rounding.
-    const bool none_above_0 = texel_range.y <= float(VXR_CELL_PAD_ABS);
-    return !((none_above_0 && ch.lo >= 0.0) || (texel_range.y * ch.scale - ch.lo) / (ch.hi - ch.lo) < -1e-4);
-  }
+  // Average sums windowed values: a cell adds nothing when each of its
+  // samples windows to 0 exactly. A stored maximum within the pool's
+  // padding of 0 means no voxel above 0.
+  if (model_ == OpticalModel::kAverage)
+    return !average_clear(texel_range.y <= float(VXR_CELL_PAD_ABS), texel_range.y * ch.scale, ch.lo, ch.hi);
   // The lookup at u = x * 255 mixes entries floor(u) and floor(u) + 1 (the
   // latter with weight 0 at an integer u). The shader's float u lies within
   // far less than kSlack of this one; a value clear of the window (by more
@@ -832,17 +851,16 @@ BrickBox BrickRenderer::march_box(const ChunkKey& key, const LodSettings& clip, 
   }
   if (facts) *facts = oc.facts;
   if (blocks) *blocks = &oc.blocks;
-  // Average counts the length of the segment of a brick's whole box
-  // (brick_raycast.comp add_brick_length): it walks past its empty cells,
-  // and its tile entries clip to the blocks' depths.
-  if (cells->model() == OpticalModel::kAverage) return m;
+  // An average whose rays show entry 0 is cast wherever the volume is:
+  // whole bricks, walking past their empty cells.
+  if (cells->marches_whole_bricks()) return m;
   m.lo = glm::max(m.lo, glm::dvec3(oc.lo) * s - 0.5 - grow);
   m.hi = glm::min(m.hi, glm::dvec3(oc.hi) * s - 0.5 + grow);
   return m;
 }
 
 void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
-                                const LodSettings& clip, const BrickBox& local, bool walk, bool length_only) const {
+                                const LodSettings& clip, const BrickBox& local, bool walk, bool no_samples) const {
   // Everything in double, then local (small) numbers to float.
   const BrickBox box = chunk_box(src_, key);
   const auto& ds_u = src_.levels()[key.level].downsample;
@@ -854,7 +872,7 @@ void BrickRenderer::fill_record(void* out, const ChunkKey& key, const glm::vec3&
   r.box_lo = v4(local.lo);
   r.box_hi = v4(glm::max(local.lo, local.hi));
   r.box_lo.w = walk ? 0.0f : 1.0f;
-  r.box_hi.w = length_only ? 1.0f : 0.0f;
+  r.box_hi.w = no_samples ? 1.0f : 0.0f;
   r.atlas = glm::vec4(atlas_origin, float(pool_->slot_of(key)));  // w: the slot, for its cell ranges
   if (clip.cut.enabled) {
     // dot(n, lo0 + ds * p) + d  ->  dot(n * ds, p) + dot(n, lo0) + d, normalised.
@@ -893,11 +911,15 @@ bool BrickRenderer::minip_walk_pays(const CellFacts& f) {
 
 bool BrickRenderer::iso_skips(const RenderSettings& s) const { return iso_back_sample(s) && pool_->apron() >= 2; }
 
-void BrickRenderer::set_iso_back(shader::RaycastParams& params, const RenderSettings& s, const RoiBox& roi) const {
+void BrickRenderer::set_clip(shader::RaycastParams& params, const RenderSettings& s, const LodSettings& clip) const {
   params.control2.w = iso_skips(s) ? 1u : 0u;
-  if (!roi.enabled) return;  // pack_params' region: the whole volume
-  params.region_lo = glm::vec4(glm::max(glm::dvec3(params.region_lo), roi.lo), 0.0f);
-  params.region_hi = glm::vec4(glm::min(glm::dvec3(params.region_hi), roi.hi), 0.0f);
+  if (clip.cut.enabled && glm::length(clip.cut.normal) > 0.0) {
+    const double len = glm::length(clip.cut.normal);
+    params.cut = glm::vec4(glm::dvec4(clip.cut.normal / len, clip.cut.offset / len));
+  }
+  if (!clip.roi.enabled) return;  // pack_params' region: the whole volume
+  params.region_lo = glm::vec4(glm::max(glm::dvec3(params.region_lo), clip.roi.lo), 0.0f);
+  params.region_hi = glm::vec4(glm::min(glm::dvec3(params.region_hi), clip.roi.hi), 0.0f);
 }
 
 Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, const RenderSettings& s, uint32_t model,
@@ -1390,7 +1412,7 @@ Result<std::vector<glm::uvec2>> BrickRenderer::build_waves(const std::vector<Bri
 Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                                        const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
                                        const LodView& view, const WarpAxis& ax, const WarpAxis& ay, bool by_groups,
-                                       bool length_counts, glm::uvec4* dst, size_t capacity, size_t* used,
+                                       bool keep_rays, glm::uvec4* dst, size_t capacity, size_t* used,
                                        WorkSpans* spans) {
   const uint32_t tw = (ax.warped() + 7) / 8, th = (ay.warped() + 7) / 8;
   spans->blocks = 0;
@@ -1458,8 +1480,8 @@ Status BrickRenderer::build_tile_lists(const std::vector<BrickBox>& boxes, const
       for (uint32_t x = t0.x; x <= t1.x; ++x) {
         const glm::dvec2 e = depths[size_t(y - t0.y) * rw + (x - t0.x)];
         if (!(e.x <= e.y)) {  // no block here: its rays would find every cell empty
-          // Average rays still count the brick's length: an entry whose depths clip every sample.
-          if (length_counts) lists[size_t(y) * tw + x].push_back({b, glm::vec2(0.0f, 0.0f)});
+          // An average that shows entry 0 casts these rays too: an entry whose depths clip every sample.
+          if (keep_rays) lists[size_t(y) * tw + x].push_back({b, glm::vec2(0.0f, 0.0f)});
           continue;
         }
         // Widened well past float rounding of the rays' depths.
@@ -1671,7 +1693,10 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   // iso only where iso_skips), and the work lists cover only its screen
   // rectangle: the same image, without the empty margin.
   const bool skip_cells = frame.lod.skip_empty && frame.skip_cells;
-  const bool whole_bricks = s.model == OpticalModel::kAverage;
+  // An average whose table shows entry 0 must cast every ray that meets
+  // the volume (a ray that takes nothing shows entry 0 too): its bricks
+  // march whole, and are listed wherever their rays go.
+  const bool whole_bricks = s.model == OpticalModel::kAverage && average_shows_zero(s, tf);
   const bool classified = s.model != OpticalModel::kIsosurface || iso_skips(s);
   std::optional<CellOpacity> cell_opacity;
   if (skip_cells && classified) cell_opacity.emplace(s, tf, value_scales_);
@@ -1706,9 +1731,9 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     const std::vector<BrickBox>* kept_blocks = nullptr;  // march_box's cache: valid until its next call
     const BrickBox local = march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts,
                                      opt_.tile_depths ? &kept_blocks : nullptr);
-    // Average: a brick with no kept cell adds only its segment's length, no sample.
-    const bool length_only = whole_bricks && cell_opacity && near && facts.none_kept;
-    const bool walk = near && !length_only && (reduce || !(whole_bricks ? facts.every_kept : facts.all_kept));
+    // Average over whole bricks: a brick with no kept cell is listed, takes no sample.
+    const bool no_samples = whole_bricks && cell_opacity && near && facts.none_kept;
+    const bool walk = near && !no_samples && (reduce || !(whole_bricks ? facts.every_kept : facts.all_kept));
     if (kept_blocks && walk) {
       blocks_[i].x = static_cast<uint32_t>(block_world_.size());
       for (const BrickBox& b : *kept_blocks) {
@@ -1719,7 +1744,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     }
     walks[i] = walk;
     fill_record(static_cast<uint8_t*>(table_.mapped) + table_base + i * sizeof(shader::BrickRecord), key,
-                glm::vec3(o), view, frame.lod, local, walk, length_only);
+                glm::vec3(o), view, frame.lod, local, walk, no_samples);
     if (cell_opacity && walk) {  // only walked bricks weigh in the choice of cells or groups below
       split += facts.split;
       groups += facts.boxed_groups;
@@ -1744,6 +1769,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   // record_cast clears first.
   const bool by_groups = opt_.group_lists && skip_cells && ctx_.info().subgroup_size == 8 &&
                          (s.model == OpticalModel::kEmissionAbsorption || s.model == OpticalModel::kEmission ||
+                          (s.model == OpticalModel::kAverage && !whole_bricks) ||
                           (s.model == OpticalModel::kIsosurface && iso_skips(s))) &&
                          clears_tiled_view(target, width, height);
   auto build_work = [&]() -> Status {
@@ -1778,7 +1804,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
       pack_params(plan_raycast(camera, s, placement(), value_scales_, ax.full, ay.full), false);
   params.control.y = width;  // the rays dispatched (the warped grid's)
   params.control.z = height;
-  set_iso_back(params, s, frame.lod.roi);
+  set_clip(params, s, frame.lod);
   const VkDeviceSize params_offset = VkDeviceSize(views_) * params_stride_;
   std::memcpy(static_cast<uint8_t*>(params_.mapped) + params_offset, &params, sizeof(params));
 
@@ -2068,7 +2094,7 @@ Result<ImageRgba8> BrickRenderer::render_monolithic(const Camera& camera, const 
   BrickFrameStats st;
   st.lod.drawn = 1;
   shader::RaycastParams params = pack_params(plan_raycast(camera, s, placement(), value_scales_, width, height), false);
-  set_iso_back(params, s, clip.roi);
+  set_clip(params, s, clip);
   const RenderTarget target{target_.image, target_.view, target_.format, {width, height}, VK_IMAGE_LAYOUT_GENERAL};
   Status recorded = Status::ok();
   const auto t0 = std::chrono::steady_clock::now();

@@ -172,12 +172,20 @@ Status check_brick_settings(const RenderSettings& s, uint32_t channels = 1);
 //    one that took samples shows the table at its maximum).
 //  - minip: the mirror image: every range at or above the window's high end
 //    (windowed 1 never lowers the running minimum) and entry 255 transparent.
-//  - average: never (the length averaged over is counted per brick marched;
-//    its empty cells are skipped inside the brick: CellOpacity).
+//  - average: every enabled channel's range windows to 0 exactly (clearly
+//    below the window's low end, or nothing above 0 under a window from 0
+//    up) and no enabled channel's entry 0 is opaque (average_shows_zero: a
+//    ray whose every brick was skipped shows nothing). The rays count the
+//    length they average over from their chord (brick_raycast.comp
+//    region_length), not from the bricks they march.
 //  - iso: the iso channel's range reaches the iso value (below it no sample
 //    can cross), where iso_back_sample holds; otherwise never (a crossing is
 //    then refined against the sample the ray carried, which a skip would lose).
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, std::span<const ChunkStats> ranges);
+// Average: whether an enabled channel's table entry 0 is opaque, so a ray
+// that takes nothing but meets the volume shows it: such a view skips no
+// brick and casts every ray over whole bricks (cells are still skipped).
+bool average_shows_zero(const RenderSettings& s, const TransferTable& table);
 // One channel: ranges = {[lo, hi]}.
 bool brick_may_contribute(const RenderSettings& s, const TransferTable& table, double lo, double hi);
 
@@ -211,6 +219,8 @@ class CellOpacity {
   bool may_contribute(uint32_t channel, glm::vec2 texel_range) const;
   uint32_t channels() const { return static_cast<uint32_t>(channels_.size()); }
   OpticalModel model() const { return model_; }
+  // Average whose table shows entry 0 (average_shows_zero): march_box keeps the whole brick.
+  bool marches_whole_bricks() const { return whole_bricks_; }
   // Channel `channel`'s texel value windowed as the rays window it (0..1, gamma applied).
   double windowed(uint32_t channel, double texel) const;
   // Equal for settings that classify every cell alike (what a cached box is keyed by); never 0.
@@ -223,6 +233,7 @@ class CellOpacity {
     std::array<uint16_t, VXR_TF_SIZE> opaque_upto{};  // entries 0..i with non-zero opacity
   };
   OpticalModel model_ = OpticalModel::kEmissionAbsorption;
+  bool whole_bricks_ = false;
   bool iso_skips_ = false;  // iso: iso_back_sample
   uint32_t iso_channel_ = 0;
   double iso_norm_ = 0;  // the iso value windowed, as the rays compare it
@@ -429,9 +440,9 @@ class BrickRenderer final : public VolumeRenderer {
                      CellFacts* facts = nullptr, const std::vector<BrickBox>** blocks = nullptr);
   // Fills the brick record for `key` (`atlas_origin`: interior origin in
   // texels; `box`: march_box, local voxels; `walk`: its rays walk cells;
-  // `length_only`: average rays add its segment's length and take no sample).
+  // `no_samples`: its rays take no sample (an average over whole bricks lists it so they are cast)).
   void fill_record(void* record, const ChunkKey& key, const glm::vec3& atlas_origin, const LodView& view,
-                   const LodSettings& clip, const BrickBox& box, bool walk, bool length_only = false) const;
+                   const LodSettings& clip, const BrickBox& box, bool walk, bool no_samples = false) const;
   // Records one view's dispatches with `set` and writes the result into `target`.
   // Which empty-space cells the rays walk: none, the pool's (BrickCells), or
   // groups of 2x2x2 of them where the pool's are smaller than 4 voxels
@@ -498,8 +509,9 @@ class BrickRenderer final : public VolumeRenderer {
   // Whether this view's iso crossings read their sample back in their brick
   // (iso_back_sample, with the slots' apron of 2), so iso skips empty space.
   bool iso_skips(const RenderSettings& s) const;
-  // The view's parameters for iso_crossing: the flag and the region (volume within the ROI).
-  void set_iso_back(shader::RaycastParams& params, const RenderSettings& s, const RoiBox& roi) const;
+  // The view's clip for iso_crossing and the average's length: the iso
+  // flag, the region (volume within the ROI) and the cut plane.
+  void set_clip(shader::RaycastParams& params, const RenderSettings& s, const LodSettings& clip) const;
   // Tiled: per 8x8 tile, the front-to-back list of bricks whose screen
   // rectangle touches it; then the tiles with a brick that walks (`walks`,
   // per drawn brick), those with bricks that do not, and those without
@@ -512,13 +524,13 @@ class BrickRenderer final : public VolumeRenderer {
   // `by_groups`: the tiles with a brick that walks also as the 4x2 blocks
   // (spans->marched_groups) whose rays can meet a brick's screen rectangle
   // or, where it has them, one of its blocks (TileFrusta::group_meets).
-  // `length_counts` (average): a tile whose rays meet none of a brick's
-  // blocks keeps it, with depths that clip every sample: its rays count the
-  // brick's length (brick_raycast.comp add_brick_length).
+  // `keep_rays` (an average over whole bricks, average_shows_zero): a tile
+  // whose rays meet none of a brick's blocks keeps it, with depths that
+  // clip every sample, so its rays are still cast (and show entry 0).
   Status build_tile_lists(const std::vector<BrickBox>& boxes, const std::vector<uint8_t>& walks,
                           const std::vector<glm::uvec2>& blocks, const std::vector<BrickBox>& block_boxes,
                           const LodView& view, const WarpAxis& ax, const WarpAxis& ay, bool by_groups,
-                          bool length_counts, glm::uvec4* dst, size_t capacity, size_t* used, WorkSpans* spans);
+                          bool keep_rays, glm::uvec4* dst, size_t capacity, size_t* used, WorkSpans* spans);
   // A work list of at least `entries` (twice the old at least), the old one
   // kept until the next begin_frame: the frame's earlier views still read it.
   Status grow_work_list(size_t entries);
