@@ -594,8 +594,9 @@ TEST_CASE("brick features: each optical model matches the CPU reference (goldens
     s.channels[0].window_hi = 120;
     s.channels[0].opacity_points = {{0.0, 1.0}, {1.0, 1.0}};
     Case c = mri_case(*src, "brick_model_average", s,
-                      "mean value along each ray (an X-ray-like projection), window 0..120, gray; every brick "
-                      "a ray meets counts its length (a cell that windows to 0 adds nothing, so the rays may skip it)");
+                      "mean value along each ray (an X-ray-like projection), window 0..120, gray; each ray divides "
+                      "by its chord through the volume; entry 0 is opaque, so every brick is cast (cells that "
+                      "window to 0 are skipped)");
     // A ray grazing the box's silhouette for less than a step takes one
     // sample or none depending on whether float or double places its entry
     // (average shows any sample at full opacity): a few such edge pixels.

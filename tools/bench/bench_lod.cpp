@@ -161,8 +161,7 @@ int run(const Options& o) {
                 off_c->ms, format_stats(off_c->stats).c_str());
 
     // --- skip per model: what skipping buys each optical model, with the
-    // same image (average skips cells and bricks' samples, never a brick:
-    // each brick a ray meets counts its length).
+    // same image.
     nlohmann::json models = nlohmann::json::object();
     bool all_identical = true;
     for (OpticalModel m : {OpticalModel::kEmissionAbsorption, OpticalModel::kEmission, OpticalModel::kMip,
