@@ -948,7 +948,7 @@ Status BrickRenderer::record_cast(VkCommandBuffer cmd, VkDescriptorSet set, cons
                              (direct ? 0u : VXR_BRICK_FINAL_FLOAT);
   shader::BrickCastParams p{};
   // Empty-space cells: for the models whose empty samples change nothing
-  // (average: its length counted per brick; iso where its crossings read
+  // (average: its length is the ray's chord; iso where its crossings read
   // their sample back again, iso_skips).
   // MIP / MinIP test a cell against the ray's running value, so each cell
   // costs a walk; they pay from 8 samples a cell (4-voxel cells: step 0.5).

@@ -423,8 +423,8 @@ class BrickRenderer final : public VolumeRenderer {
     uint32_t split = 0;
     uint32_t boxed_groups = 0;  // groups meeting the box of kept cells (what a walk may cross)
     bool all_kept = false;      // every cell in the box is kept: a walk would find no empty cell
-    bool every_kept = false;    // every cell of the brick is kept (average marches the whole brick)
-    bool none_kept = false;     // no cell is kept (average: the brick adds only its length)
+    bool every_kept = false;    // every cell of the brick is kept (an average over whole bricks walks otherwise)
+    bool none_kept = false;     // no cell is kept (an average over whole bricks: its rays take no sample)
     // One-channel MinIP (see record_view): the lowest windowed maximum of
     // any cell, and the cells by windowed minimum in kMinIpBins bins over 0..1.
     float lowest_max = 1.0f;
