@@ -187,6 +187,7 @@ void set_atlas_slot(vec3 origin) {
 }
 // Where the ray ends (t units): the underlay's depth, +inf without one.
 float g_t_limit = 1.0 / 0.0;
+vec2 g_chord = vec2(0.0);  // average: the ray's chord through the region (region_chord)
 // A probe's sum (VXR_SC_SAMPLE_WORK): stored as the pixel, so its work is kept.
 float g_probe = 0.0;
 
@@ -666,6 +667,12 @@ bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
   const vec3 tmax = mix(max(ta, tb), vec3(1.0 / 0.0), parallel);
   t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
   t1 = min(min(min(tmax.x, tmax.y), tmax.z), g_t_limit);
+  if (VXR_SC_MODEL == VXR_MODEL_AVERAGE) {
+    // Within the chord (which holds the cut): every sample taken is counted in its length.
+    t0 = max(t0, g_chord.x);
+    t1 = min(t1, g_chord.y);
+    return t1 > t0;
+  }
   const vec4 pl = br.plane;
   if (pl.xyz != vec3(0.0)) {
     const float num = dot(pl.xyz, e) + pl.w, den = dot(pl.xyz, dl);
@@ -676,18 +683,19 @@ bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
   return t1 > t0;
 }
 
-// Average: the length it averages over, from the ray's chord through the
-// region (the volume within the ROI, in front of the cut, short of the
-// underlay's depth): the samples of the ray's level-0 grid there times the
-// step, as the CPU reference counts them. It does not depend on which
-// bricks or cells are marched or skipped, so samples that window to 0 can
-// be skipped without changing a bit. (The slab test is segment's, on the
-// region in voxel coordinates.)
-float region_length(vec3 dir, float offset) {
+// Average: the ray's chord through the region (the volume within the ROI,
+// in front of the cut, short of the underlay's depth), as [t0, t1) (empty:
+// t1 <= t0). Its bricks march only within it (segment), and the length it
+// averages over is the samples of its level-0 grid there times the step
+// (chord_length), as the CPU reference counts them: a length that does not
+// depend on which bricks or cells are marched or skipped, so samples that
+// window to 0 can be skipped without changing a bit. (The slab test is
+// segment's, on the region in voxel coordinates.)
+vec2 region_chord(vec3 dir) {
   const vec3 e = P.eye.xyz, lo = P.region_lo.xyz, hi = P.region_hi.xyz;
   const bvec3 parallel = equal(dir, vec3(0.0));
   const uvec3 outside = uvec3(lessThan(e, lo)) | uvec3(greaterThanEqual(e, hi));
-  if (any(bvec3(uvec3(parallel) & outside))) return 0.0;
+  if (any(bvec3(uvec3(parallel) & outside))) return vec2(0.0);
   const vec3 inv = 1.0 / dir;
   const vec3 ta = (lo - e) * inv, tb = (hi - e) * inv;
   const vec3 tmin = mix(min(ta, tb), vec3(-1.0 / 0.0), parallel);
@@ -699,11 +707,15 @@ float region_length(vec3 dir, float offset) {
     const float num = dot(pl.xyz, e) + pl.w, den = dot(pl.xyz, dir);
     if (den > 0.0) t0 = max(t0, -num / den);
     else if (den < 0.0) t1 = min(t1, -num / den);
-    else if (num < 0.0) return 0.0;
+    else if (num < 0.0) return vec2(0.0);
   }
-  if (!(t1 > t0)) return 0.0;
+  return vec2(t0, t1);
+}
+
+float chord_length(vec2 chord, vec3 dir, float offset) {
+  if (!(chord.y > chord.x)) return 0.0;
   const float dt = P.march.x / length(dir);  // a level-0 brick's step (scale 1)
-  return max(ceil(t1 / dt - offset) - ceil(t0 / dt - offset), 0.0) * dt;
+  return max(ceil(chord.y / dt - offset) - ceil(chord.x / dt - offset), 0.0) * dt;
 }
 
 // Lens warp, one axis: warped pixel coordinate q (n rays, `edge` per outer
@@ -772,6 +784,7 @@ void main() {
   const bool underlay = (flags & VXR_BRICK_UNDERLAY) != 0u;
   // A view depth z lies at t = z * |raw_dir| (raw_dir has unit view depth), as in the CPU reference.
   if (underlay) g_t_limit = imageLoad(under_depth, full_pix).r * length(raw_dir);
+  if (VXR_SC_MODEL == VXR_MODEL_AVERAGE) g_chord = region_chord(dir);
 
   // Where samples sit in their step (P.march.w < 0: jitter), as in the CPU reference.
   const float offset = P.march.w < 0.0 ? vxr_jitter(uvec2(full_pix)) : P.march.w;
@@ -787,8 +800,8 @@ void main() {
     else g_probe = state.x;
   }
   if (item_mode && ray.done) return;  // terminated earlier: nothing to add
-  // Average: the length once per ray, where it starts or first loads its state (region_length).
-  if (VXR_SC_MODEL == VXR_MODEL_AVERAGE && ray.count == 0.0) ray.count = region_length(dir, offset);
+  // Average: the length once per ray, where it starts or first loads its state (region_chord).
+  if (VXR_SC_MODEL == VXR_MODEL_AVERAGE && ray.count == 0.0) ray.count = chord_length(g_chord, dir, offset);
   uint taken = 0u;
 
   const bool tile_lists = (flags & VXR_BRICK_TILE_LISTS) != 0u;

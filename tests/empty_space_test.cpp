@@ -680,7 +680,7 @@ TEST_CASE("empty-space cells: isosurface frames skip what lies below the iso val
 TEST_CASE("empty-space cells: average frames skip what windows to 0, their length taken from the ray's chord") {
   // An average is the windowed values' sum over the length marched. A
   // sample that windows to 0 adds nothing to the sum, and the rays take the
-  // length from their chord through the volume (region_length), not from
+  // length from their chord through the volume (region_chord), not from
   // what they march, so cells and bricks whose samples all window to 0 are
   // skipped. Where the table's entry 0 is transparent, like any model's;
   // where it is opaque, a ray that takes nothing still shows it, so the

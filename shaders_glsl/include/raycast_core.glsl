@@ -183,7 +183,7 @@ void vxr_step(inout VxrRay r, RaycastParams P, vec3 eye, vec3 dir, float t, floa
   if (model == VXR_MODEL_AVERAGE) {
     // The length averaged over (count) is the marcher's: the ray's chord,
     // so samples it skips, whose windowed values are 0 exactly, change
-    // nothing (brick_raycast.comp region_length).
+    // nothing (brick_raycast.comp region_chord).
     r.reduce += x * seg;
     return;
   }

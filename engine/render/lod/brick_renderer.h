@@ -177,7 +177,7 @@ Status check_brick_settings(const RenderSettings& s, uint32_t channels = 1);
 //    up) and no enabled channel's entry 0 is opaque (average_shows_zero: a
 //    ray whose every brick was skipped shows nothing). The rays count the
 //    length they average over from their chord (brick_raycast.comp
-//    region_length), not from the bricks they march.
+//    region_chord), not from the bricks they march.
 //  - iso: the iso channel's range reaches the iso value (below it no sample
 //    can cross), where iso_back_sample holds; otherwise never (a crossing is
 //    then refined against the sample the ray carried, which a skip would lose).
