@@ -858,15 +858,23 @@ TEST_CASE("brick features: atlases read by hand hold a word per texel: u8 (x, y)
     }
 }
 
+namespace {
+// The head clipped to the box [20,160]x[30,200]x[0,20] and cut by the
+// oblique plane (1,1,0) through the centre, the +x+y side kept.
+void clip_head(Case& c) {
+  c.frame.lod.roi = {true, {20, 30, 0}, {160, 200, 20}};
+  const glm::dvec3 n = glm::normalize(glm::dvec3(1, 1, 0));
+  c.frame.lod.cut = {true, n, -glm::dot(n, glm::dvec3(93, 113, 13.5))};
+}
+}  // namespace
+
 TEST_CASE("brick features: cut plane and ROI together match the CPU reference (golden)") {
   auto src = mri();
   Case c = mri_case(*src, "brick_cut_roi", test::mri_settings(OpticalModel::kEmissionAbsorption, "hot"),
                     "the head clipped to the box [20,160]x[30,200]x[0,20] (voxels) and cut by the oblique plane "
                     "(1,1,0) through the centre, the +x+y side kept: the inside of the head shows on both cuts; "
                     "matches the CPU reference clipped the same way");
-  c.frame.lod.roi = {true, {20, 30, 0}, {160, 200, 20}};
-  const glm::dvec3 n = glm::normalize(glm::dvec3(1, 1, 0));
-  c.frame.lod.cut = {true, n, -glm::dot(n, glm::dvec3(93, 113, 13.5))};
+  clip_head(c);
   run(c);
 }
 
@@ -883,9 +891,7 @@ TEST_CASE("brick features: average with a cut plane and an ROI matches the CPU r
                     "mean value along each ray of the head clipped to the box [20,160]x[30,200]x[0,20] and cut by "
                     "the oblique plane (1,1,0) through the centre (the +x+y side kept), each ray divided by its "
                     "chord through what is kept; matches the CPU reference clipped the same way");
-  c.frame.lod.roi = {true, {20, 30, 0}, {160, 200, 20}};
-  const glm::dvec3 n = glm::normalize(glm::dvec3(1, 1, 0));
-  c.frame.lod.cut = {true, n, -glm::dot(n, glm::dvec3(93, 113, 13.5))};
+  clip_head(c);
   // The reference on the GPU's own grid: the same samples, so each ray's
   // count is compared as well as its sum (at a finer reference step the
   // short rays along the clipped faces average other samples).
