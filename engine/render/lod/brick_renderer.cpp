@@ -1689,7 +1689,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
                                                                sizeof(shader::BrickRecord)) +
                         " (of " + std::to_string(opt_.max_bricks) + "); raise the LOD bias or max_bricks");
   // Where skipping jumps empty cells, rays march only the box of a brick's
-  // kept cells (every model but average, which marches whole bricks, and
+  // kept cells (every model but an average over whole bricks, below, and
   // iso only where iso_skips), and the work lists cover only its screen
   // rectangle: the same image, without the empty margin.
   const bool skip_cells = frame.lod.skip_empty && frame.skip_cells;

@@ -27,8 +27,8 @@
 // Empty space is skipped three ways, with identical images: the traversal
 // drops bricks whose min/max maps to zero opacity (brick_may_contribute);
 // rays march only the box of a brick's cells that may change a ray
-// (CellOpacity, march_box; average marches whole bricks, whose length it
-// counts, and iso needs iso_back_sample), and the work lists cover only
+// (CellOpacity, march_box; an average whose table shows entry 0 marches
+// whole bricks, and iso needs iso_back_sample), and the work lists cover only
 // that box's screen rectangle; rays jump the empty cells (~4^3 voxels,
 // BrickCells) inside it, on the same sample grid. LodSettings::skip_empty
 // turns all off, BrickFrameSettings::skip_cells the boxes and cells (`vxr
@@ -207,10 +207,10 @@ bool iso_back_sample(const RenderSettings& s);
 // cell (clearly below / above the window, entry 0 / 255 transparent); for iso
 // (where iso_back_sample holds) the iso channel clearly below the iso value;
 // for average every sample windowing to 0 exactly (it adds nothing; the
-// rays count the length of each brick's whole segment). Marching only the
-// box of the cells it keeps (BrickRenderer::march_box; average marches its
-// whole bricks and walks past the empty cells) then gives the image of
-// marching them all.
+// rays take their length from their chord). Marching only the box of the
+// cells it keeps (BrickRenderer::march_box; an average whose table shows
+// entry 0 marches whole bricks and walks past the empty cells) then gives
+// the image of marching them all.
 class CellOpacity {
  public:
   // `value_scales`: per drawn channel, data units per texel unit.
