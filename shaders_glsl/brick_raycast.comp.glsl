@@ -646,36 +646,27 @@ float iso_crossing(vec3 e, vec3 dl, vec4 plane, float i, float offset, float dt,
   return vb < P.iso.x ? tb + (P.iso.x - vb) / (v - vb) * (t - tb) : t;
 }
 
-// The ray's segment [t0, t1) inside brick b (its clip box and cut plane), in
-// t units (level-0 voxels along dir). False when it misses.
-bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
-  const vec3 e = br.eye.xyz;
-  const vec3 dl = dir * br.scale.xyz;  // local voxels per unit t
-  const vec3 lo = br.box_lo.xyz, hi = br.box_hi.xyz;
+// The ray e + t d inside the box [lo, hi) and in front of `plane` (keep
+// dot(xyz, p) + w >= 0; xyz = 0: none), short of the underlay's depth, as
+// [t0, t1) from t = 0. False when it misses.
+bool box_chord(vec3 e, vec3 d, vec3 lo, vec3 hi, vec4 plane, out float t0, out float t1) {
   // Slab test, the three axes at once (an axis loop indexes its vectors
   // lane by lane on lavapipe). A ray parallel to a slab lies in it when
   // lo <= e < hi: a face plane belongs to the box whose low face it is (as in
   // the CPU reference), so of two neighbouring bricks exactly one marches a
   // ray lying in their shared face; that axis then does not bound t (its
   // 0 * inf is selected away, never used).
-  const bvec3 parallel = equal(dl, vec3(0.0));
+  const bvec3 parallel = equal(d, vec3(0.0));
   const uvec3 outside = uvec3(lessThan(e, lo)) | uvec3(greaterThanEqual(e, hi));
   if (any(bvec3(uvec3(parallel) & outside))) return false;
-  const vec3 inv = 1.0 / dl;
+  const vec3 inv = 1.0 / d;
   const vec3 ta = (lo - e) * inv, tb = (hi - e) * inv;
   const vec3 tmin = mix(min(ta, tb), vec3(-1.0 / 0.0), parallel);
   const vec3 tmax = mix(max(ta, tb), vec3(1.0 / 0.0), parallel);
   t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
   t1 = min(min(min(tmax.x, tmax.y), tmax.z), g_t_limit);
-  if (VXR_SC_MODEL == VXR_MODEL_AVERAGE) {
-    // Within the chord (which holds the cut): every sample taken is counted in its length.
-    t0 = max(t0, g_chord.x);
-    t1 = min(t1, g_chord.y);
-    return t1 > t0;
-  }
-  const vec4 pl = br.plane;
-  if (pl.xyz != vec3(0.0)) {
-    const float num = dot(pl.xyz, e) + pl.w, den = dot(pl.xyz, dl);
+  if (plane.xyz != vec3(0.0)) {
+    const float num = dot(plane.xyz, e) + plane.w, den = dot(plane.xyz, d);
     if (den > 0.0) t0 = max(t0, -num / den);
     else if (den < 0.0) t1 = min(t1, -num / den);
     else if (num < 0.0) return false;
@@ -683,32 +674,28 @@ bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
   return t1 > t0;
 }
 
+// The ray's segment [t0, t1) inside brick b (its clip box and cut plane), in
+// t units (level-0 voxels along dir). False when it misses.
+bool segment(BrickRecord br, vec3 dir, out float t0, out float t1) {
+  const vec3 dl = dir * br.scale.xyz;  // local voxels per unit t
+  if (VXR_SC_MODEL != VXR_MODEL_AVERAGE) return box_chord(br.eye.xyz, dl, br.box_lo.xyz, br.box_hi.xyz, br.plane, t0, t1);
+  // Average: within the ray's chord (which holds the cut), so every sample taken is counted in its length.
+  if (!box_chord(br.eye.xyz, dl, br.box_lo.xyz, br.box_hi.xyz, vec4(0.0), t0, t1)) return false;
+  t0 = max(t0, g_chord.x);
+  t1 = min(t1, g_chord.y);
+  return t1 > t0;
+}
+
 // Average: the ray's chord through the region (the volume within the ROI,
 // in front of the cut, short of the underlay's depth), as [t0, t1) (empty:
-// t1 <= t0). Its bricks march only within it (segment), and the length it
+// (0, 0)). Its bricks march only within it (segment), and the length it
 // averages over is the samples of its level-0 grid there times the step
 // (chord_length), as the CPU reference counts them: a length that does not
 // depend on which bricks or cells are marched or skipped, so samples that
-// window to 0 can be skipped without changing a bit. (The slab test is
-// segment's, on the region in voxel coordinates.)
+// window to 0 can be skipped without changing a bit.
 vec2 region_chord(vec3 dir) {
-  const vec3 e = P.eye.xyz, lo = P.region_lo.xyz, hi = P.region_hi.xyz;
-  const bvec3 parallel = equal(dir, vec3(0.0));
-  const uvec3 outside = uvec3(lessThan(e, lo)) | uvec3(greaterThanEqual(e, hi));
-  if (any(bvec3(uvec3(parallel) & outside))) return vec2(0.0);
-  const vec3 inv = 1.0 / dir;
-  const vec3 ta = (lo - e) * inv, tb = (hi - e) * inv;
-  const vec3 tmin = mix(min(ta, tb), vec3(-1.0 / 0.0), parallel);
-  const vec3 tmax = mix(max(ta, tb), vec3(1.0 / 0.0), parallel);
-  float t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
-  float t1 = min(min(min(tmax.x, tmax.y), tmax.z), g_t_limit);
-  const vec4 pl = P.cut;
-  if (pl.xyz != vec3(0.0)) {
-    const float num = dot(pl.xyz, e) + pl.w, den = dot(pl.xyz, dir);
-    if (den > 0.0) t0 = max(t0, -num / den);
-    else if (den < 0.0) t1 = min(t1, -num / den);
-    else if (num < 0.0) return vec2(0.0);
-  }
+  float t0, t1;
+  if (!box_chord(P.eye.xyz, dir, P.region_lo.xyz, P.region_hi.xyz, P.cut, t0, t1)) return vec2(0.0);
   return vec2(t0, t1);
 }
 
