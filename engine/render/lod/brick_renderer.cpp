@@ -1693,13 +1693,14 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
   // iso only where iso_skips), and the work lists cover only its screen
   // rectangle: the same image, without the empty margin.
   const bool skip_cells = frame.lod.skip_empty && frame.skip_cells;
-  // An average whose table shows entry 0 must cast every ray that meets
-  // the volume (a ray that takes nothing shows entry 0 too): its bricks
-  // march whole, and are listed wherever their rays go.
-  const bool whole_bricks = s.model == OpticalModel::kAverage && average_shows_zero(s, tf);
   const bool classified = s.model != OpticalModel::kIsosurface || iso_skips(s);
   std::optional<CellOpacity> cell_opacity;
   if (skip_cells && classified) cell_opacity.emplace(s, tf, value_scales_);
+  // An average whose table shows entry 0 must cast every ray that meets
+  // the volume (a ray that takes nothing shows entry 0 too): its bricks
+  // march whole, and are listed wherever their rays go. Without cells
+  // nothing is skipped, so every ray is cast anyway.
+  const bool whole_bricks = cell_opacity && cell_opacity->marches_whole_bricks();
   std::vector<BrickBox>& march_world = march_world_;  // reused: no allocation per view once sizes settle
   std::vector<uint8_t>& walks = walks_;
   march_world.resize(lod.draw.size());
@@ -1732,7 +1733,7 @@ Status BrickRenderer::record_view(VkCommandBuffer cmd, const Camera& camera, con
     const BrickBox local = march_box(key, frame.lod, cell_opacity && near ? &*cell_opacity : nullptr, &facts,
                                      opt_.tile_depths ? &kept_blocks : nullptr);
     // Average over whole bricks: a brick with no kept cell is listed, takes no sample.
-    const bool no_samples = whole_bricks && cell_opacity && near && facts.none_kept;
+    const bool no_samples = whole_bricks && near && facts.none_kept;
     const bool walk = near && !no_samples && (reduce || !(whole_bricks ? facts.every_kept : facts.all_kept));
     if (kept_blocks && walk) {
       blocks_[i].x = static_cast<uint32_t>(block_world_.size());
