@@ -698,16 +698,15 @@ TEST_CASE("empty-space cells: average frames skip what windows to 0, their lengt
     INFO("entry 0 opaque");
     check_clip_views_keep_image(r, zero_shows);
   }
-  // Which bricks each kind skips.
-  const ClipView front = clip_views(r.placement())[0];
+  // Which bricks each kind skips, from the orbit view.
+  const ClipView orbit = clip_views(r.placement())[0];
   BrickFrameStats transparent_zero, opaque_zero;
-  converge(r, front.cam, vessel_settings(OpticalModel::kAverage), front.frame(), 97, 97, &transparent_zero);
-  converge(r, front.cam, zero_shows, front.frame(), 97, 97, &opaque_zero);
+  converge(r, orbit.cam, vessel_settings(OpticalModel::kAverage), orbit.frame(), 97, 97, &transparent_zero);
+  converge(r, orbit.cam, zero_shows, orbit.frame(), 97, 97, &opaque_zero);
   CHECK(transparent_zero.lod.skipped_empty > 0);
   CHECK(opaque_zero.lod.skipped_empty == 0);
   CHECK(transparent_zero.samples < opaque_zero.samples);
-  // The orbit view with the automatic LOD: near bricks at level 0, far ones at level 1.
-  const ClipView orbit = clip_views(r.placement())[0];
+  // The same view with the automatic LOD: near bricks at level 0, far ones at level 1.
   BrickFrameSettings mixed = orbit.frame();
   mixed.lod.force_level = -1;
   const VoxelSpaceRays rays = rays_in_voxel_space(orbit.cam, r.placement(), 97, 97);
