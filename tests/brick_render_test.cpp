@@ -67,6 +67,26 @@ void check(const std::string& name, const ImageRgba8& img, const std::string& wh
   CHECK(r.passed);
 }
 
+// A clipped frame (cut plane or ROI) of the 128^3 vessels at level 0: the
+// bricks outside are culled, and the picture is the monolithic path's, which
+// clips each sample instead; then the golden.
+void check_clipped(const std::string& name, LodSettings clip, const std::string& why) {
+  auto src = make(128);
+  auto r = renderer(*src);
+  const Camera cam = orbit_camera(r->placement(), 30, 25, 1.25);
+  BrickFrameSettings f;
+  f.lod = clip;
+  f.lod.force_level = 0;
+  BrickFrameStats st;
+  const ImageRgba8 img = converge(*r, cam, vessels(), f, 128, 128, &st);
+  CHECK(st.lod.culled > 0);
+  REQUIRE(r->set_monolithic(0).is_ok());
+  auto mono = r->render_monolithic(cam, vessels(), f.lod, 128, 128);
+  REQUIRE(mono.is_ok());
+  CHECK(test::diff_images(img, *mono).max_abs <= 1);
+  check(name, img, why);
+}
+
 }  // namespace
 
 TEST_CASE("brick render: empty-space skipping takes far fewer samples and gives the identical image") {
@@ -253,42 +273,19 @@ TEST_CASE("brick render: with uploads throttled every frame is complete and conv
 
 TEST_CASE("brick render: a cut plane clips the vessels (golden)") {
   test::GpuTestScope scope;
-  auto src = make(128);
-  auto r = renderer(*src);
-  const Camera cam = orbit_camera(r->placement(), 30, 25, 1.25);
-  BrickFrameSettings f;
-  f.lod.force_level = 0;
-  f.lod.cut = {true, glm::normalize(glm::dvec3(1, 1, 0.5)), -glm::dot(glm::normalize(glm::dvec3(1, 1, 0.5)), glm::dvec3(64))};
-  BrickFrameStats st;
-  const ImageRgba8 img = converge(*r, cam, vessels(), f, 128, 128, &st);
-  CHECK(st.lod.culled > 0);
-  // The monolithic path clips by the same plane per sample: same picture.
-  REQUIRE(r->set_monolithic(0).is_ok());
-  f.lod.skip_empty = false;
-  auto mono = r->render_monolithic(cam, vessels(), f.lod, 128, 128);
-  REQUIRE(mono.is_ok());
-  CHECK(test::diff_images(img, *mono).max_abs <= 1);
-  check("lod_cut_plane", img,
-        "vessels of the 128^3 procedural volume cut by the oblique plane (1,1,0.5) through the centre; the half "
-        "toward +x+y remains");
+  LodSettings clip;
+  const glm::dvec3 n = glm::normalize(glm::dvec3(1, 1, 0.5));
+  clip.cut = {true, n, -glm::dot(n, glm::dvec3(64))};
+  check_clipped("lod_cut_plane", clip,
+                "vessels of the 128^3 procedural volume cut by the oblique plane (1,1,0.5) through the centre; the "
+                "half toward +x+y remains");
 }
 
 TEST_CASE("brick render: an ROI keeps only its box (golden)") {
   test::GpuTestScope scope;
-  auto src = make(128);
-  auto r = renderer(*src);
-  const Camera cam = orbit_camera(r->placement(), 30, 25, 1.25);
-  BrickFrameSettings f;
-  f.lod.force_level = 0;
-  f.lod.roi = {true, {20, 30, 10}, {100, 90, 80}};
-  BrickFrameStats st;
-  const ImageRgba8 img = converge(*r, cam, vessels(), f, 128, 128, &st);
-  CHECK(st.lod.culled > 0);
-  REQUIRE(r->set_monolithic(0).is_ok());
-  auto mono = r->render_monolithic(cam, vessels(), f.lod, 128, 128);
-  REQUIRE(mono.is_ok());
-  CHECK(test::diff_images(img, *mono).max_abs <= 1);
-  check("lod_roi", img, "only the vessels inside the box [20,100]x[30,90]x[10,80] of the 128^3 volume");
+  LodSettings clip;
+  clip.roi = {true, {20, 30, 10}, {100, 90, 80}};
+  check_clipped("lod_roi", clip, "only the vessels inside the box [20,100]x[30,90]x[10,80] of the 128^3 volume");
 }
 
 TEST_CASE("brick render: a close view mixes levels by distance (golden)") {
