@@ -34,6 +34,15 @@ void advise_huge_pages(void* base, VkDeviceSize bytes) {
 #endif
 }
 
+Result<Handle<VkDeviceMemory>> allocate_memory(const Context& ctx, VkDeviceSize bytes, uint32_t type) {
+  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  mai.allocationSize = bytes;
+  mai.memoryTypeIndex = type;
+  VkDeviceMemory mem = VK_NULL_HANDLE;
+  VXR_VK_TRY(vkAllocateMemory(ctx.device(), &mai, nullptr, &mem));
+  return Handle<VkDeviceMemory>(ctx.device(), mem);
+}
+
 }  // namespace
 
 Result<Buffer> create_buffer(const Context& ctx, const BufferCreateInfo& info) {
@@ -64,14 +73,10 @@ Result<Buffer> create_buffer(const Context& ctx, const BufferCreateInfo& info) {
       break;
   }
   VXR_ASSIGN_OR_RETURN(uint32_t type, ctx.find_memory_type(req.memoryTypeBits, required, preferred));
-  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  mai.allocationSize = req.size;
-  mai.memoryTypeIndex = type;
-  VkDeviceMemory mem = VK_NULL_HANDLE;
-  VXR_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, &mem));
-  b.memory = Handle<VkDeviceMemory>(dev, mem);
-  VXR_VK_TRY(vkBindBufferMemory(dev, raw, mem, 0));
-  if (info.intent != MemoryIntent::kDeviceLocal) VXR_VK_TRY(vkMapMemory(dev, mem, 0, VK_WHOLE_SIZE, 0, &b.mapped));
+  VXR_ASSIGN_OR_RETURN(b.memory, allocate_memory(ctx, req.size, type));
+  VXR_VK_TRY(vkBindBufferMemory(dev, raw, b.memory, 0));
+  if (info.intent != MemoryIntent::kDeviceLocal)
+    VXR_VK_TRY(vkMapMemory(dev, b.memory, 0, VK_WHOLE_SIZE, 0, &b.mapped));
   return b;
 }
 
@@ -160,16 +165,11 @@ Result<Image> create_image(const Context& ctx, const ImageCreateInfo& info) {
       info.host_mapped ? VkMemoryPropertyFlags(VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
                        : VkMemoryPropertyFlags(VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
   VXR_ASSIGN_OR_RETURN(uint32_t type, ctx.find_memory_type(req.memoryTypeBits, required, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT));
-  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  mai.allocationSize = req.size;
-  mai.memoryTypeIndex = type;
-  VkDeviceMemory mem = VK_NULL_HANDLE;
-  VXR_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, &mem));
-  img.memory = Handle<VkDeviceMemory>(dev, mem);
-  VXR_VK_TRY(vkBindImageMemory(dev, raw, mem, 0));
+  VXR_ASSIGN_OR_RETURN(img.memory, allocate_memory(ctx, req.size, type));
+  VXR_VK_TRY(vkBindImageMemory(dev, raw, img.memory, 0));
   if (info.host_mapped) {
     void* base = nullptr;
-    VXR_VK_TRY(vkMapMemory(dev, mem, 0, VK_WHOLE_SIZE, 0, &base));  // unmapped when the memory is freed
+    VXR_VK_TRY(vkMapMemory(dev, img.memory, 0, VK_WHOLE_SIZE, 0, &base));  // unmapped when the memory is freed
     if (ctx.info().is_cpu()) advise_huge_pages(base, req.size);
     const VkImageSubresource sub{VK_IMAGE_ASPECT_COLOR_BIT, 0, 0};
     VkSubresourceLayout layout{};
