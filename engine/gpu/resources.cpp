@@ -194,25 +194,31 @@ Result<Image> create_image(const Context& ctx, const ImageCreateInfo& info) {
   return img;
 }
 
-void transition_image(VkCommandBuffer cmd, Image& image, VkImageLayout new_layout,
-                      VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
-                      VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access) {
-  const bool depth = image.format == VK_FORMAT_D32_SFLOAT;
+void image_barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, VkImageLayout from, VkImageLayout to,
+                   VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access, VkPipelineStageFlags2 dst_stage,
+                   VkAccessFlags2 dst_access) {
   VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
   b.srcStageMask = src_stage;
   b.srcAccessMask = src_access;
   b.dstStageMask = dst_stage;
   b.dstAccessMask = dst_access;
-  b.oldLayout = image.layout;
-  b.newLayout = new_layout;
+  b.oldLayout = from;
+  b.newLayout = to;
   b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
   b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  b.image = image.image;
-  b.subresourceRange = {static_cast<VkImageAspectFlags>(depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT), 0, 1, 0, 1};
+  b.image = image;
+  b.subresourceRange = {aspect, 0, 1, 0, 1};
   VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
   dep.imageMemoryBarrierCount = 1;
   dep.pImageMemoryBarriers = &b;
   vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+void transition_image(VkCommandBuffer cmd, Image& image, VkImageLayout new_layout, VkPipelineStageFlags2 src_stage,
+                      VkAccessFlags2 src_access, VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access) {
+  const VkImageAspectFlags aspect =
+      image.format == VK_FORMAT_D32_SFLOAT ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
+  image_barrier(cmd, image.image, aspect, image.layout, new_layout, src_stage, src_access, dst_stage, dst_access);
   image.layout = new_layout;
 }
 
